@@ -1,0 +1,75 @@
+# cram-plans — one-command setup, build, test, demo and benchmarks.
+# Every target works on a fresh Debian bookworm machine as root.
+
+SHELL := /bin/bash
+# Debian's python3 and cmake before any pyenv shims (ROS tools, CMake modules).
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+export ROS_HOME ?= $(CURDIR)/.ros
+export ROS_MASTER_URI ?= http://127.0.0.1:11311
+export ROS_IP ?= 127.0.0.1
+export CL_SOURCE_REGISTRY := $(CURDIR)//:/usr/share/roslisp//:/usr/share/common-lisp/ros//:
+
+PACKAGES := sbcl cl-cffi cl-alexandria cl-fiveam cl-cxml cl-puri cl-ppcre cl-lparallel \
+  cl-bordeaux-threads cl-trivial-garbage cl-yason \
+  g++ make cmake pkg-config \
+  libbullet-dev liburdfdom-dev libfcl-dev libeigen3-dev libosmesa6-dev \
+  liborocos-kdl-dev libkdl-parser-dev libassimp-dev libpng-dev liburdfdom-tools \
+  python3-roslaunch python3-rosparam python3-rostopic python3-rosnode rosout rosbash python3-rospy \
+  roslisp cl-std-msgs cl-geometry-msgs cl-tf2-msgs cl-sensor-msgs cl-visualization-msgs cl-nav-msgs \
+  python3-tf2-msgs libtf2-dev libtf2-ros-dev ros-robot-state-publisher joint-state-publisher \
+  rviz xvfb imagemagick x11-apps
+BENCH_PACKAGES := swi-prolog-nox
+
+SBCL := sbcl --noinform --non-interactive --no-userinit --no-sysinit \
+        --eval '(require :asdf)'
+NATIVE_LIB := projection/native/build/libcram_native.so
+OUT ?= out
+
+.PHONY: all setup setup-bench build native lisp test demo bench check-native clean
+
+all: build
+
+# Install the Debian packages the project needs; quick when all are present.
+setup:
+	@missing=$$(dpkg-query -W -f='$${Package} $${Status}\n' $(PACKAGES) 2>/dev/null \
+	   | awk '$$NF=="installed"{print $$1}' | sort | comm -13 - <(tr ' ' '\n' <<< "$(PACKAGES)" | grep . | sort)); \
+	if [ -n "$$missing" ]; then \
+	  echo "setup: installing $$(wc -w <<< "$$missing") Debian packages"; \
+	  apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $(PACKAGES); \
+	else echo "setup: all $(words $(PACKAGES)) Debian packages present"; fi
+	@mkdir -p "$(ROS_HOME)"
+
+setup-bench: setup
+	@dpkg-query -W -f='$${Status}\n' $(BENCH_PACKAGES) 2>/dev/null | grep -q 'ok installed' || \
+	  (apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $(BENCH_PACKAGES))
+
+.setup-done: Makefile
+	$(MAKE) setup
+	@touch $@
+
+native: .setup-done
+	$(MAKE) -C projection/native
+
+lisp: native
+	$(SBCL) --eval '(asdf:load-system "cram-plans")' \
+	        --eval '(asdf:load-system "cram-plans-tests")'
+
+build: lisp
+
+test: build
+	@mkdir -p "$(ROS_HOME)"
+	$(SBCL) --load tests/run.lisp
+
+demo: build
+	@mkdir -p $(OUT)
+	$(SBCL) --load tools/demo.lisp --eval '(cram-plans-demo:main "$(OUT)")'
+
+bench: build setup-bench
+	$(SBCL) --load tests/bench/run.lisp
+
+check-native: native
+	$(MAKE) -C projection/native check
+
+clean:
+	$(MAKE) -C projection/native clean
+	rm -rf $(OUT) .setup-done

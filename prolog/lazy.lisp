@@ -1,0 +1,167 @@
+;;;; Lazy lists: an ordinary cons chain whose last cdr is a LAZY-TAIL.
+;;;; Reading past the expanded part calls the tail's generator once and splices the new cons in
+;;;; place of the tail, so each element is computed once (the list is memoised) and the expanded
+;;;; prefix is shared by every reader. Plain lists are lazy lists that are fully expanded.
+
+(in-package :cram-utilities)
+
+(defstruct (lazy-tail (:constructor %make-lazy-tail (generator)))
+  "The unexpanded end of a lazy list. GENERATOR returns (values element present-p)."
+  (generator nil :type function)
+  (lock nil))
+
+(defmethod print-object ((tail lazy-tail) stream)
+  (print-unreadable-object (tail stream) (write-string "..." stream)))
+
+(defun expand-tail (tail)
+  "Compute the next element behind TAIL: a fresh cons (element . TAIL), or NIL at the end."
+  (declare (type lazy-tail tail))
+  (multiple-value-bind (element present-p) (funcall (lazy-tail-generator tail))
+    (if present-p (cons element tail) nil)))
+
+(defun make-lazy-list (generator)
+  "Return a lazy list whose elements are produced by calling GENERATOR, a function of no
+arguments returning (values element present-p); PRESENT-P NIL ends the list. The first element
+is computed at once (an empty generator gives NIL)."
+  (check-type generator function)
+  (expand-tail (%make-lazy-tail generator)))
+
+(defmacro lazy-list ((&rest bindings) &body body)
+  "Build a lazy list from a generator loop. BINDINGS are (var init) pairs holding the loop state.
+BODY is evaluated for each step and must end the step with one of the local forms:
+  (CONT value new-values...) yield VALUE, then continue with the state set to NEW-VALUES;
+  (NEXT new-values...)       yield nothing, continue with the new state;
+  (FINISH [value])           end the list, yielding VALUE first when given.
+New values are assigned to the BINDINGS variables in order; missing ones keep their value."
+  (let ((vars (mapcar (lambda (b) (if (consp b) (first b) b)) bindings))
+        (step (gensym "STEP")) (done (gensym "DONE")) (result (gensym "RESULT")))
+    `(let (,@(mapcar (lambda (b) (if (consp b) (list (first b) (second b)) (list b nil))) bindings)
+           (,done nil))
+       (make-lazy-list
+        (lambda ()
+          (if ,done
+              (values nil nil)
+              (block ,result
+                (loop
+                  (block ,step
+                    (macrolet ((cont (value &rest new-values)
+                                 `(let ((v ,value))
+                                    (psetq ,@(mapcan #'list (subseq ',vars 0 (length new-values))
+                                                     new-values))
+                                    (return-from ,',result (values v t))))
+                               (next (&rest new-values)
+                                 `(progn (psetq ,@(mapcan #'list
+                                                          (subseq ',vars 0 (length new-values))
+                                                          new-values))
+                                         (return-from ,',step)))
+                               (finish (&optional (value nil value-p))
+                                 `(progn (setf ,',done t)
+                                         (return-from ,',result
+                                           ,(if value-p `(values ,value t) '(values nil nil))))))
+                      ,@body
+                      (error "LAZY-LIST body ended without CONT, NEXT or FINISH")))))))))))
+
+(declaim (inline lazy-list-p))
+(defun lazy-list-p (object)
+  "True when OBJECT is a list or a lazy list (a cons chain that may end in a lazy tail)."
+  (listp object))
+
+(defun lazy-car (list)
+  "The first element of the lazy LIST."
+  (car list))
+
+(defun lazy-cdr (list)
+  "The rest of the lazy LIST, computing its next element if needed (at most once)."
+  (let ((rest (cdr list)))
+    (if (lazy-tail-p rest)
+        (setf (cdr list) (expand-tail rest))
+        rest)))
+
+(defmacro lazy-dolist ((var list &optional result) &body body)
+  "Like DOLIST over a lazy list, expanding it one element at a time."
+  (let ((l (gensym "L")))
+    `(do ((,l ,list (lazy-cdr ,l)))
+         ((null ,l) ,result)
+       (let ((,var (car ,l)))
+         ,@body))))
+
+(defun force-ll (list)
+  "Expand every element of the lazy LIST and return it as an ordinary list. Never returns for an
+infinite lazy list."
+  (do ((l list (lazy-cdr l)))
+      ((null l) list)))
+
+(defun expanded-length (list)
+  "The number of elements of the lazy LIST computed so far (no further expansion)."
+  (loop for l = list then (cdr l) while (consp l) count t))
+
+(defun lazy-mapcar (function &rest lists)
+  "Lazily map FUNCTION over the elements of LISTS in parallel; ends with the shortest list."
+  (let ((ls lists) (started nil))
+    (make-lazy-list
+     (lambda ()
+       ;; advance only when the next element is asked for
+       (if started (setf ls (mapcar #'lazy-cdr ls)) (setf started t))
+       (if (some #'null ls)
+           (values nil nil)
+           (values (apply function (mapcar #'car ls)) t))))))
+
+(defun lazy-mapcan (function list)
+  "Lazily append the (lazy) lists that FUNCTION returns for each element of LIST."
+  (let ((outer list) (inner nil) (started nil))
+    (make-lazy-list
+     (lambda ()
+       (loop
+         (cond (inner
+                (let ((element (car inner)))
+                  (setf inner (lazy-cdr inner))
+                  (return (values element t))))
+               ((and started (null outer)) (return (values nil nil)))
+               (t
+                (if started (setf outer (lazy-cdr outer)) (setf started t))
+                (when (null outer) (return (values nil nil)))
+                (setf inner (funcall function (car outer))))))))))
+
+(defun lazy-filter (predicate list)
+  "The lazy list of the elements of LIST for which PREDICATE is true."
+  (let ((l list) (started nil))
+    (make-lazy-list
+     (lambda ()
+       (loop
+         (if started (setf l (lazy-cdr l)) (setf started t))
+         (when (null l) (return (values nil nil)))
+         (when (funcall predicate (car l)) (return (values (car l) t))))))))
+
+(defun lazy-append (&rest lists)
+  "The lazy concatenation of the (lazy) LISTS; later lists are not touched until reached."
+  (lazy-mapcan #'identity lists))
+
+(defun lazy-take (n list)
+  "A lazy list of the first N elements of the (possibly infinite) lazy LIST."
+  (check-type n (integer 0))
+  (let ((l list) (left n) (started nil))
+    (make-lazy-list
+     (lambda ()
+      (block lazy-take-step
+       (when (<= left 0) (return-from lazy-take-step (values nil nil)))
+       (if started (setf l (lazy-cdr l)) (setf started t))
+       (if (null l)
+           (values nil nil)
+           (progn (decf left) (values (car l) t))))))))
+
+(defun lazy-elt (list n)
+  "The N-th element (0-based) of the lazy LIST, or NIL when it is shorter."
+  (check-type n (integer 0))
+  (loop repeat n
+        while list
+        do (setf list (lazy-cdr list)))
+  (car list))
+
+(defun lazy-fold (function list &key (initial-value nil initial-p))
+  "Fold FUNCTION (accumulator element) over the lazy LIST from the left. Without INITIAL-VALUE
+the first element starts the accumulator."
+  (let ((acc initial-value) (l list))
+    (unless initial-p
+      (setf acc (car l) l (lazy-cdr l)))
+    (lazy-dolist (element l acc)
+      (setf acc (funcall function acc element)))))

@@ -1,0 +1,22 @@
+;;;; The root FiveAM suite; every layer's suite is a child of ALL.
+
+(defpackage :cram-plans-tests
+  (:use :cl)
+  (:export #:all #:run-all))
+
+(in-package :cram-plans-tests)
+
+(fiveam:def-suite all :description "Every test of cram-plans.")
+
+(defun run-all ()
+  "Run suite ALL, print FiveAM's report and one closing line `N passed, N failed'.
+Returns true when nothing failed. Counts are per check."
+  (let ((results (fiveam:run 'all)))
+    (fiveam:explain! results)
+    (multiple-value-bind (ok failed skipped) (fiveam:results-status results)
+      (declare (ignore ok))
+      (format t "~&~d passed, ~d failed~%"
+              (- (length results) (length failed) (length skipped))
+              (length failed))
+      (finish-output)
+      (null failed))))
