@@ -15,26 +15,151 @@
   :depends-on ("cram-utilities" "alexandria")
   :pathname "prolog/"
   :serial t
-  :components ((:file "prolog-package")))
+  :components ((:file "prolog-package")
+               (:file "terms")
+               (:file "predicates")
+               (:file "compiler")
+               (:file "control")
+               (:file "database")
+               (:file "builtins")
+               (:file "library")
+               (:file "query")))
 
 (defsystem "cl-transforms"
   :description "3D vectors, quaternions, poses, transforms, stamped poses, a TF buffer (CL-TRANSFORMS, CL-TRANSFORMS-STAMPED, CL-TF, CRAM-TF)."
-  :depends-on ("alexandria")
+  :depends-on ("alexandria" "bordeaux-threads")
   :pathname "src/transforms/"
   :serial t
-  :components ((:file "package")))
+  :components ((:file "package")
+               (:file "checks")
+               (:file "vectors")
+               (:file "rotations")
+               (:file "poses")
+               (:file "stamped")
+               (:file "transformer")
+               (:file "cram-tf")))
 
 (defsystem "cram-native"
   :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, FCL, OSMesa, libpng)."
   :depends-on ("cffi" "alexandria")
   :pathname "projection/"
   :serial t
-  :components ((:file "native")))
+  :components ((:file "native")
+               (:file "native-world")
+               (:file "native-robot")
+               (:file "native-query")
+               (:file "native-render")
+               (:file "native-ik")))
+
+(defsystem "cram-language"
+  :description "The CRAM plan language (CPL): tasks, PAR/PURSUE/TRY-*, failures, fluents, the task tree, logging."
+  :depends-on ("alexandria" "bordeaux-threads" "yason")
+  :pathname "src/language/"
+  :serial t
+  :components ((:file "package")
+               (:file "logging")
+               (:file "conditions")
+               (:file "task-tree")
+               (:file "tasks")
+               (:file "failures")
+               (:file "language")
+               (:file "fluents")
+               (:file "task-tree-output")))
+
+(defsystem "cram-common-failures"
+  :description "The failure classes robot plans signal (COMMON-FAIL) and the retry-with-solutions strategies."
+  :depends-on ("cram-language" "cram-utilities")
+  :pathname "src/language/"
+  :serial t
+  :components ((:file "common-failures")
+               (:file "failure-strategies")))
+
+(defsystem "cram-designators"
+  :description "Designators: action, motion, location, object and human descriptions grounded through Prolog (package DESIG)."
+  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms")
+  :pathname "designators/"
+  :serial t
+  :components ((:file "desig-package")
+               (:file "desig-protocol")
+               (:file "desig-macros")
+               (:file "desig-grounding")
+               (:file "desig-location")
+               (:file "desig-facts")))
+
+(defsystem "cram-robot-interfaces"
+  :description "Interface predicates of robot descriptions and the current robot (package ROB-INT)."
+  :depends-on ("cram-prolog" "cram-utilities")
+  :pathname "designators/"
+  :serial t
+  :components ((:file "robot-interfaces-package")
+               (:file "robot-interfaces")
+               (:file "robot-interfaces-facts")))
+
+(defsystem "cram-location-costmap"
+  :description "Location costmaps and their metadata predicates (package COSTMAP)."
+  :depends-on ("cram-prolog" "cram-utilities" "cram-robot-interfaces")
+  :pathname "designators/"
+  :serial t
+  :components ((:file "costmap-package")
+               (:file "costmap-metadata")))
+
+(defsystem "cram-pr2-description"
+  :description "The PR2 as robot-description facts keyed by :PR2 (package PR2-DESCR)."
+  :depends-on ("cram-prolog" "cram-robot-interfaces" "cram-location-costmap" "cl-transforms")
+  :pathname "robots/pr2/"
+  :components ((:file "package")
+               (:file "general-knowledge" :depends-on ("package"))
+               (:file "arms" :depends-on ("package"))
+               (:file "neck" :depends-on ("package"))))
+
+(defsystem "cram-pepper-description"
+  :description "The Pepper robot as robot-description facts keyed by PEPPER-DESCR:PEPPER."
+  :depends-on ("cram-prolog" "cram-robot-interfaces" "cram-location-costmap" "cl-transforms")
+  :pathname "robots/pepper/"
+  :components ((:file "package")
+               (:file "general-knowledge" :depends-on ("package"))
+               (:file "arms" :depends-on ("package"))
+               (:file "neck" :depends-on ("package"))))
+
+(defsystem "cram-executive"
+  :description "PERFORM, process modules, events and occasions, projection environments (EXE, CPM, COE, CPOE, PROJ)."
+  :depends-on ("cram-utilities" "cram-prolog" "cram-designators" "cram-language"
+               "cram-common-failures")
+  :pathname "src/executive/"
+  :serial t
+  :components ((:file "executive-package")
+               (:file "occasions-events")
+               (:file "plan-events")
+               (:file "process-modules")
+               (:file "projection")
+               (:file "perform")))
+
+(defsystem "cram-bullet-reasoning"
+  :description "The Bullet belief state: URDF models (CL-URDF), worlds and objects, Prolog
+predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)."
+  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms" "cram-native"
+               "cram-robot-interfaces" "cxml" "trivial-garbage" "bordeaux-threads")
+  :pathname "projection/btr/"
+  :serial t
+  :components ((:file "package")
+               (:file "urdf")
+               (:file "world")
+               (:file "objects")
+               (:file "meshes")
+               (:file "robot")
+               (:file "queries")
+               (:file "pictures")
+               (:file "facts")
+               (:file "utils")))
 
 (defsystem "cram-plans"
   :description "CRAM plans with a Bullet belief state for projection: all layers."
   :version "0.1.0"
-  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms" "cram-native"))
+  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms" "cram-native"
+               "cram-language" "cram-common-failures"
+               "cram-robot-interfaces" "cram-location-costmap"
+               "cram-pr2-description" "cram-pepper-description"
+               "cram-designators" "cram-executive" "cram-bullet-reasoning"))
 
 ;;; Tests: one system per layer, all run by cram-plans-tests.
 
@@ -58,15 +183,50 @@
   :depends-on ("cram-plans-tests/base" "cl-transforms")
   :pathname "tests/"
   :serial t
-  :components ())
+  :components ((:file "transforms-tests")
+               (:file "transforms-tf-tests")))
 
 (defsystem "cram-plans-tests/native"
-  :depends-on ("cram-plans-tests/base" "cram-native")
+  :depends-on ("cram-plans-tests/base" "cram-native" "sb-posix")
   :pathname "tests/"
   :serial t
-  :components ())
+  :components ((:file "native-tests")
+               (:file "native-tests-2")
+               (:file "native-fuzz-tests")))
+
+(defsystem "cram-plans-tests/language"
+  :depends-on ("cram-plans-tests/base" "cram-language" "cram-common-failures")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "language-tests")
+               (:file "language-tree-tests")))
+
+(defsystem "cram-plans-tests/robots"
+  :depends-on ("cram-plans-tests/base" "cram-robot-interfaces" "cram-location-costmap"
+               "cram-pr2-description" "cram-pepper-description" "cxml")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "robots-tests")
+               (:file "robots-pepper-tests")
+               (:file "robots-urdf-tests")))
+
+(defsystem "cram-plans-tests/designators"
+  :depends-on ("cram-plans-tests/base" "cram-designators")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "designators-tests")
+               (:file "designators-grounding-tests")))
+
+(defsystem "cram-plans-tests/executive"
+  :depends-on ("cram-plans-tests/base" "cram-executive")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "executive-tests")))
 
 (defsystem "cram-plans-tests"
   :description "Every FiveAM suite of cram-plans, under the suite CRAM-PLANS-TESTS:ALL."
   :depends-on ("cram-plans-tests/utilities" "cram-plans-tests/prolog"
-               "cram-plans-tests/transforms" "cram-plans-tests/native"))
+               "cram-plans-tests/transforms" "cram-plans-tests/native"
+               "cram-plans-tests/language"
+               "cram-plans-tests/robots"
+               "cram-plans-tests/designators" "cram-plans-tests/executive"))

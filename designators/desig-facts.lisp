@@ -1,0 +1,91 @@
+;;;; Prolog interface of the designators: the extendable grounding predicates (which fail until
+;;;; other layers add rules) and predicates to inspect designators.
+
+(in-package :cram-designators)
+
+(defun designator-property-pairs (designator)
+  "The entries of DESIGNATOR as (KEY VALUE) lists (the first value of each entry)."
+  (mapcar (lambda (entry) (list (car entry) (second entry))) (description designator)))
+
+(def-fact-group designator-grounding-interfaces (action-grounding motion-grounding
+                                                 location-grounding)
+  ;; (action-grounding ?designator ?grounding): ?grounding is (plan-function resolved-designator)
+  ;; or (plan-function argument...).
+  (<- (action-grounding ?designator ?grounding)
+    (fail))
+  ;; (motion-grounding ?designator ?grounding): ?grounding is (command argument...).
+  (<- (motion-grounding ?designator ?grounding)
+    (fail))
+  ;; (location-grounding ?designator ?solution): one candidate solution per proof.
+  (<- (location-grounding ?designator ?solution)
+    (fail))
+  (<- (location-grounding ?designator ?pose)
+    (loc-desig? ?designator)
+    (desig-prop ?designator (:pose ?pose)))
+  (<- (location-grounding ?designator ?pose)
+    (loc-desig? ?designator)
+    (desig-prop ?designator (:poses ?poses))
+    (member ?pose ?poses)))
+
+(def-fact-group designator-inspection ()
+  (<- (desig-prop ?designator (?key ?value))
+    (lisp-pred designator-p ?designator)
+    (lisp-fun designator-property-pairs ?designator ?pairs)
+    (member (?key ?value) ?pairs))
+  (<- (desig-description ?designator ?description)
+    (lisp-pred designator-p ?designator)
+    (lisp-fun description ?designator ?description))
+  (<- (desig-class ?designator ?type)
+    (lisp-pred designator-p ?designator)
+    (lisp-fun designator-type ?designator ?type))
+  (<- (action-desig? ?designator)
+    (lisp-pred typep ?designator action-designator))
+  (<- (motion-desig? ?designator)
+    (lisp-pred typep ?designator motion-designator))
+  (<- (loc-desig? ?designator)
+    (lisp-pred typep ?designator location-designator))
+  (<- (obj-desig? ?designator)
+    (lisp-pred typep ?designator object-designator))
+  (<- (human-desig? ?designator)
+    (lisp-pred typep ?designator human-designator))
+  (<- (desig-equal ?designator-1 ?designator-2)
+    (lisp-pred desig-equal ?designator-1 ?designator-2))
+  (<- (current-designator ?designator ?current)
+    (lisp-pred designator-p ?designator)
+    (lisp-fun current-desig ?designator ?current))
+  (<- (designator-groundings ?designator ?solutions)
+    (lisp-pred designator-p ?designator)
+    (lisp-fun designator-solutions ?designator ?solutions)))
+
+(defun location-grounding-generator (designator)
+  "Location generator: the solutions of the LOCATION-GROUNDING predicate for DESIGNATOR."
+  (lazy-mapcar (lambda (bindings) (var-value '?solution bindings))
+               (prolog `(location-grounding ,designator ?solution))))
+
+(register-location-generator 10 location-grounding-generator
+  "Solutions of the Prolog predicate LOCATION-GROUNDING, e.g. a (POSE p) property.")
+
+;;; Documentation of the predicates (kept as the function documentation of their symbols).
+
+(loop for (name text) in
+      '((action-grounding "Prolog predicate (action-grounding ?designator ?grounding): ground an
+action designator to (plan-function resolved-designator) or (plan-function argument...).
+Extendable: plan layers add rules per action type.")
+        (motion-grounding "Prolog predicate (motion-grounding ?designator ?grounding): ground a
+motion designator to a command list (command argument...). Extendable.")
+        (location-grounding "Prolog predicate (location-grounding ?designator ?solution): one
+candidate location per proof; (POSE p) and (POSES list) are grounded here. Extendable.")
+        (desig-prop "Prolog predicate (desig-prop ?designator (?key ?value)): the entries of a
+bound designator; keys are keywords.")
+        (desig-description "Prolog predicate (desig-description ?designator ?description).")
+        (desig-class "Prolog predicate (desig-class ?designator ?type): the type keyword.")
+        (action-desig? "Prolog predicate (action-desig? ?d): ?d is an action designator.")
+        (motion-desig? "Prolog predicate (motion-desig? ?d): ?d is a motion designator.")
+        (loc-desig? "Prolog predicate (loc-desig? ?d): ?d is a location designator.")
+        (obj-desig? "Prolog predicate (obj-desig? ?d): ?d is an object designator.")
+        (human-desig? "Prolog predicate (human-desig? ?d): ?d is a human designator.")
+        (current-designator "Prolog predicate (current-designator ?d ?current): the newest
+designator of ?d's equation chain.")
+        (designator-groundings "Prolog predicate (designator-groundings ?d ?solutions): the lazy
+list of all solutions of ?d."))
+      do (setf (documentation name 'function) text))

@@ -1,0 +1,53 @@
+;;;; Packages of the Bullet belief state: CL-URDF (URDF models), BTR (worlds, objects, Prolog
+;;;; predicates, pictures, visibility) and BTR-UTILS (convenience functions of the tutorials).
+
+(defpackage :cl-urdf
+  (:use :cl)
+  (:export #:parse-urdf #:urdf-error #:robot #:name #:links #:joints #:root-link #:source
+           #:link #:joint #:parent #:child #:joint-type #:origin #:axis #:limits
+           #:lower #:upper #:velocity #:effort #:mimic #:from-joint #:multiplier #:offset
+           #:collision #:visual #:geometry #:material #:color #:filename #:scale #:size
+           #:radius #:len #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names))
+
+(defpackage :cram-bullet-reasoning
+  (:nicknames :btr)
+  (:use :cl :cram-prolog :cram-utilities)
+  (:local-nicknames (:native :cram-native))
+  (:shadow #:step)
+  (:export
+   ;; worlds
+   #:bt-world #:bt-reasoning-world #:*current-bullet-world* #:world-handle #:world
+   #:copy-world #:with-copied-world #:with-stored-world #:with-world #:simulate #:step
+   #:objects #:object #:%object #:add-object #:remove-object #:object-names #:world-state
+   #:restore-world-state #:get-world-objects-pose-info #:restore-world-poses
+   #:bullet-world #:destroy-world
+   ;; objects
+   #:item #:robot-object #:rigid-body #:rigid-bodies #:name #:pose #:object-pose
+   #:item-type #:item-types #:object-type #:aabb #:bounding-box #:object-color
+   #:collision-group-bits #:*mesh-files* #:add-objects-to-mesh-list #:register-ros-package
+   #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
+   ;; robots and environments
+   #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states
+   #:set-robot-state-from-joints #:joint-limits #:joint-lower-limit #:joint-upper-limit
+   #:get-robot-object #:get-robot-name #:get-environment-object #:*environment-name*
+   #:robot-object-p #:link-exists-p #:calculate-pan-tilt
+   #:attach-object #:detach-object #:detach-all-objects #:attached-objects #:object-attached
+   #:available-arms
+   ;; physics and geometry queries
+   #:contact #:find-objects-in-contact #:find-all-contacts #:objects-in-contact-p
+   #:robot-colliding-objects-without-attached #:object-not-in-collision
+   #:stable #:stable-p #:supported-by #:above #:below #:above-p #:below-p
+   ;; pictures and visibility
+   #:debug-window #:*snapshot-directory* #:*debug-snapshots* #:png-snapshot #:snapshot
+   #:*camera-pose* #:render-camera-image
+   #:visible #:occluding-objects #:object-visible-p #:visibility-fraction
+   #:*visibility-threshold* #:camera-pose
+   ;; Prolog interface names
+   #:retract #:assert #:attached #:object-pose-on #:link #:head-pointing-at
+   #:with-copied-world #:object-bottom-pose #:%pose))
+
+(defpackage :cram-bullet-reasoning-utilities
+  (:nicknames :btr-utils)
+  (:use :cl)
+  (:export #:spawn-object #:move-object #:kill-object #:kill-all-objects #:move-robot
+           #:object-instance #:object-pose))

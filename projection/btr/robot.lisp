@@ -1,0 +1,243 @@
+;;;; Articulated objects from URDF (robots and environments): joints, links, rigid bodies named
+;;;; OBJ.LINK, attachments.
+
+(in-package :cram-bullet-reasoning)
+
+(defstruct (kinematic-model (:conc-name km-))
+  "What does not change between copies of an articulated object."
+  (urdf nil) (link-names #() :type simple-vector) (link-index (make-hash-table :test 'equal))
+  (joint-names #() :type simple-vector) (joint-index (make-hash-table :test 'equal))
+  (joint-info #() :type simple-vector) (rigid-bodies '()))
+
+(defclass robot-object (object)
+  ((model :initarg :model :reader %model)
+   (attached :initform '() :accessor %attached
+             :documentation "List of (object-name link-name loose grasp)."))
+  (:documentation "An articulated object built from a URDF: a robot or an environment."))
+
+(defun robot-object-p (object) "True for articulated objects." (typep object 'robot-object))
+
+(defun urdf (robot) "The CL-URDF:ROBOT model of ROBOT." (km-urdf (%model robot)))
+
+(defun link-names (robot) "The link names of ROBOT (URDF order)." (coerce (km-link-names (%model robot)) 'list))
+
+(defun joint-names (robot)
+  "The movable joint names of ROBOT (revolute, continuous, prismatic; URDF order)."
+  (loop for n across (km-joint-names (%model robot))
+        for info across (km-joint-info (%model robot))
+        when (member (getf info :type) '(:revolute :continuous :prismatic)) collect n))
+
+(defun link-index (robot link)
+  "Index of LINK (a name) in ROBOT; an error naming both when unknown."
+  (or (gethash link (km-link-index (%model robot)))
+      (btr-fail "link ~s is not a link of ~s (~d links, e.g. ~{~s~^ ~})" link (name robot)
+                (length (km-link-names (%model robot)))
+                (coerce (subseq (km-link-names (%model robot)) 0 (min 5 (length (km-link-names (%model robot))))) 'list))))
+
+(defun link-exists-p (robot link) "True when ROBOT has a link LINK." (and (gethash link (km-link-index (%model robot))) t))
+
+(defun joint-index (robot joint)
+  "Index of JOINT (a name) in ROBOT; an error naming both when unknown."
+  (or (gethash joint (km-joint-index (%model robot)))
+      (btr-fail "joint ~s is not a joint of ~s" joint (name robot))))
+
+(defun link-pose (robot link)
+  "The world pose of LINK (a name) of ROBOT."
+  (vector->pose (native:robot-link-pose (whandle robot) (object-handle robot) (link-index robot link))))
+
+(defun joint-state (robot joint)
+  "The position of JOINT (a name) of ROBOT."
+  (let ((i (joint-index robot joint)))
+    (aref (native:robot-joints (whandle robot) (object-handle robot)) i)))
+
+(defun (setf joint-state) (value robot joint)
+  "Set JOINT of ROBOT to VALUE (links and attached objects follow)."
+  (set-robot-state-from-joints (list (list joint value)) robot)
+  value)
+
+(defun joint-states (robot)
+  "Alist (joint-name . position) of every movable joint of ROBOT."
+  (let ((v (native:robot-joints (whandle robot) (object-handle robot))))
+    (loop for n across (km-joint-names (%model robot))
+          for info across (km-joint-info (%model robot))
+          for i from 0
+          when (member (getf info :type) '(:revolute :continuous :prismatic))
+            collect (cons n (aref v i)))))
+
+(defun joint-limits (robot joint)
+  "(values lower upper) of JOINT of ROBOT; continuous joints give -pi, pi... as unbounded ±inf
+is not meaningful here, they return (values nil nil)."
+  (let ((info (aref (km-joint-info (%model robot)) (joint-index robot joint))))
+    (if (member (getf info :type) '(:revolute :prismatic))
+        (values (getf info :lower) (getf info :upper))
+        (values nil nil))))
+
+(defun joint-lower-limit (robot joint) "Lower limit of JOINT." (nth-value 0 (joint-limits robot joint)))
+(defun joint-upper-limit (robot joint) "Upper limit of JOINT." (nth-value 1 (joint-limits robot joint)))
+
+(defun set-robot-state-from-joints (joint-states robot)
+  "Set joints of ROBOT from JOINT-STATES: a list of (name value) or (name . value), or a hash
+table name → value. All joints are set at once, then links and attached objects move once."
+  (let ((pairs (etypecase joint-states
+                 (hash-table (loop for k being the hash-keys of joint-states using (hash-value v)
+                                   collect (cons k v)))
+                 (list (mapcar (lambda (e)
+                                 (cond ((and (consp e) (consp (cdr e)) (null (cddr e)))
+                                        (cons (first e) (second e)))
+                                       ((and (consp e) (atom (cdr e))) e)
+                                       (t (btr-fail "joint state ~s, expected (name value)" e))))
+                               joint-states)))))
+    (let ((indices (make-array (length pairs) :element-type '(signed-byte 32)))
+          (values (make-array (length pairs) :element-type 'double-float)))
+      (loop for (n . v) in pairs for i from 0
+            do (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
+               (unless (and (realp v) (< (abs v) 1d6))
+                 (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
+               (setf (aref indices i) (joint-index robot n)
+                     (aref values i) (coerce v 'double-float)))
+      (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
+      robot)))
+
+;;; ---- rigid bodies named OBJ.LINK ---------------------------------------------------------------
+
+(defclass rigid-body ()
+  ((name :initarg :name :reader name :documentation "Keyword :|OBJNAME.linkname|.")
+   (object :initarg :object :reader rigid-body-object)
+   (link :initarg :link :reader rigid-body-link :documentation "Link name or NIL for a plain body."))
+  (:documentation "One rigid body of an object: a link of an articulated object, or the body of an item."))
+
+(defmethod print-object ((b rigid-body) s)
+  (print-unreadable-object (b s :type t) (format s "~s" (name b))))
+
+(defun rigid-body-name (object-name link-name)
+  (intern (if link-name
+              (format nil "~a.~a" (symbol-name object-name) link-name)
+              (symbol-name object-name))
+          :keyword))
+
+(defmethod pose ((b rigid-body))
+  (let ((o (rigid-body-object b)))
+    (if (rigid-body-link b) (link-pose o (rigid-body-link b)) (pose o))))
+
+(defgeneric rigid-bodies (object)
+  (:documentation "The rigid bodies of OBJECT, named OBJ.LINK for articulated objects."))
+
+(defmethod rigid-bodies ((o object))
+  (list (make-instance 'rigid-body :name (rigid-body-name (name o) nil) :object o :link nil)))
+
+(defmethod rigid-bodies ((r robot-object))
+  (mapcar (lambda (l) (make-instance 'rigid-body :name (rigid-body-name (name r) l) :object r :link l))
+          (link-names r)))
+
+;;; ---- the :urdf kind ------------------------------------------------------------------------------
+
+(defun build-kinematic-model (world handle urdf)
+  (let* ((w (world-handle world))
+         (links (coerce (native:robot-link-names w handle) 'simple-vector))
+         (joints (coerce (native:robot-joint-names w handle) 'simple-vector))
+         (model (make-kinematic-model :urdf urdf :link-names links :joint-names joints
+                                      :joint-info (coerce (loop for i below (length joints)
+                                                                collect (native:robot-joint-info w handle i))
+                                                          'simple-vector))))
+    (loop for l across links for i from 0 do (setf (gethash l (km-link-index model)) i))
+    (loop for j across joints for i from 0 do (setf (gethash j (km-joint-index model)) i))
+    model))
+
+(define-object-kind :urdf (world pose urdf compound collision-group)
+  (declare (ignore compound))
+  (let* ((model (etypecase urdf
+                  (cl-urdf:robot urdf)
+                  (string (cl-urdf:parse-urdf urdf))
+                  (null (btr-fail ":urdf object needs :urdf (a URDF string or a CL-URDF:ROBOT)"))))
+         (natural-root (loop for l being the hash-values of (cl-urdf:links model)
+                             unless (cl-urdf:parent-joint l) return l)))
+    (unless (eq natural-root (cl-urdf:root-link model))
+      (btr-fail ":urdf model ~s has root link ~s set, but its tree starts at ~s"
+                (cl-urdf:name model) (cl-urdf:name (cl-urdf:root-link model)) (cl-urdf:name natural-root)))
+    (let ((handle (native:add-urdf (world-handle world) (cl-urdf:source model) :pose pose
+                                  :exact-meshes (eq collision-group :static-filter))))
+      (values handle 'robot-object nil
+              (list :model (build-kinematic-model world handle model))))))
+
+;;; ---- attachments -------------------------------------------------------------------------------
+
+(defun ensure-object (world designator)
+  (if (typep designator 'object) designator (object-or-fail world designator)))
+
+(defun attach-object (parent object &key link loose grasp)
+  "Attach OBJECT (an object or name) to PARENT: a robot-object at LINK (a link name), or an item.
+Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only recorded."
+  (let* ((world (world (if (typep parent 'object) parent *current-bullet-world*)))
+         (parent (ensure-object world parent))
+         (object (ensure-object world object))
+         (link-i (cond ((typep parent 'robot-object)
+                        (unless link (btr-fail "ATTACH-OBJECT: attaching ~s to ~s needs :link" (name object) (name parent)))
+                        (link-index parent link))
+                       (t -1))))
+    (native:attach (world-handle world) (object-handle object) (object-handle parent) link-i (if loose 1 0))
+    (when (typep parent 'robot-object)
+      (setf (%attached parent)
+            (append (remove-if (lambda (a) (and (eq (first a) (name object)) (equal (second a) link)))
+                               (%attached parent))
+                    (list (list (name object) link loose grasp)))))
+    object))
+
+(defun detach-object (parent object &key link)
+  "Detach OBJECT from PARENT (only from LINK when given)."
+  (let* ((world (world parent))
+         (object (ensure-object world object)))
+    (when (typep parent 'robot-object)
+      (setf (%attached parent)
+            (remove-if (lambda (a) (and (eq (first a) (name object)) (or (null link) (equal (second a) link))))
+                       (%attached parent))))
+    (unless (and (typep parent 'robot-object)
+                 (find (name object) (%attached parent) :key #'first))
+      (native:detach (world-handle world) (object-handle object) (object-handle parent)))
+    object))
+
+(defun detach-all-objects (parent)
+  "Detach everything attached to PARENT."
+  (when (typep parent 'robot-object)
+    (dolist (a (%attached parent))
+      (detach-object parent (first a)))))
+
+(defun attached-objects (robot)
+  "What is attached to ROBOT: a list of (object-name link-name loose grasp)."
+  (copy-list (%attached robot)))
+
+(defun object-attached (robot object)
+  "The link names of ROBOT that OBJECT (object or name) is attached to."
+  (let ((n (if (typep object 'object) (name object) object)))
+    (loop for a in (%attached robot) when (eq (first a) n) collect (second a))))
+
+;;; ---- robots and environments of the world -------------------------------------------------------
+
+(defvar *environment-name* nil
+  "Name of the environment object (e.g. :IAI-KITCHEN); NIL: the first static articulated object
+that is not the robot.")
+
+(defun get-robot-name ()
+  "The name of the robot of the current robot description (rob-int facts)."
+  (rob-int:current-robot-name))
+
+(defun get-robot-object (&optional (world *current-bullet-world*))
+  "The robot's object in WORLD (named as the current robot description), or NIL."
+  (let ((n (ignore-errors (get-robot-name))))
+    (or (and n (object world n))
+        (find-if (lambda (o) (and (typep o 'robot-object)
+                                  (equalp (cl-urdf:name (urdf o)) (and n (string n)))))
+                 (objects world)))))
+
+(defun get-environment-object (&optional (world *current-bullet-world*))
+  "The environment object of WORLD: *ENVIRONMENT-NAME*, or the first articulated object that is
+not the robot."
+  (if *environment-name*
+      (object world *environment-name*)
+      (let ((robot (get-robot-object world)))
+        (find-if (lambda (o) (and (typep o 'robot-object) (not (eq o robot)))) (objects world)))))
+
+(defun available-arms (robot arms-and-links)
+  "The arms of ARMS-AND-LINKS ((arm . link) ...) whose link carries nothing."
+  (loop for (arm . link) in arms-and-links
+        unless (find link (%attached robot) :key #'second :test #'equal)
+          collect arm))

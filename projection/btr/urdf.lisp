@@ -1,0 +1,218 @@
+;;;; CL-URDF: a URDF model parsed with cxml into CLOS objects. The parsed robot keeps its XML
+;;;; source, which is what the physics shim builds the articulated body from.
+
+(in-package :cl-urdf)
+
+(define-condition urdf-error (error)
+  ((message :initarg :message :reader urdf-error-message))
+  (:report (lambda (c s) (format s "URDF: ~a" (urdf-error-message c))))
+  (:documentation "A URDF document that cannot be parsed or is inconsistent."))
+
+(defun urdf-fail (fmt &rest args)
+  (error 'urdf-error :message (apply #'format nil fmt args)))
+
+(defclass robot ()
+  ((name :initarg :name :reader name :documentation "The <robot name>.")
+   (links :initarg :links :reader links :documentation "Hash table: link name → LINK.")
+   (joints :initarg :joints :reader joints :documentation "Hash table: joint name → JOINT.")
+   (root-link :initarg :root-link :accessor root-link :documentation "The LINK without parent.")
+   (source :initarg :source :reader source :documentation "The URDF XML text."))
+  (:documentation "A parsed URDF model."))
+
+(defclass link ()
+  ((name :initarg :name :reader name)
+   (collision :initarg :collision :initform nil :reader collision
+              :documentation "List of plists (:origin pose-list :geometry plist).")
+   (visual :initarg :visual :initform nil :reader visual
+           :documentation "List of plists (:origin :geometry :color).")
+   (parent-joint :initform nil :accessor parent-joint)
+   (child-joints :initform nil :accessor child-joints))
+  (:documentation "A URDF link."))
+
+(defclass joint ()
+  ((name :initarg :name :reader name)
+   (joint-type :initarg :type :reader joint-type :documentation "Keyword :revolute, :continuous,
+:prismatic, :fixed, :floating or :planar.")
+   (parent :initarg :parent :accessor parent :documentation "Parent LINK.")
+   (child :initarg :child :accessor child :documentation "Child LINK.")
+   (origin :initarg :origin :reader origin :documentation "((x y z) (qx qy qz qw)) of the child frame in the parent.")
+   (axis :initarg :axis :reader axis :documentation "Unit axis (x y z) in the joint frame.")
+   (limits :initarg :limits :initform nil :reader limits
+           :documentation "Plist (:lower :upper :velocity :effort) or NIL.")
+   (mimic :initarg :mimic :initform nil :reader mimic
+          :documentation "Plist (:joint name :multiplier m :offset o) or NIL."))
+  (:documentation "A URDF joint."))
+
+(defmethod print-object ((r robot) s)
+  (print-unreadable-object (r s :type t)
+    (format s "~s (~d links, ~d joints)" (name r) (hash-table-count (links r))
+            (hash-table-count (joints r)))))
+
+(defmethod print-object ((l link) s)
+  (print-unreadable-object (l s :type t) (format s "~s" (name l))))
+
+(defmethod print-object ((j joint) s)
+  (print-unreadable-object (j s :type t) (format s "~s ~s" (name j) (joint-type j))))
+
+(defun lower (joint) "Lower limit of JOINT or NIL." (getf (limits joint) :lower))
+(defun upper (joint) "Upper limit of JOINT or NIL." (getf (limits joint) :upper))
+
+;;; ---- XML helpers -----------------------------------------------------------------------
+
+(defun children-named (element tag)
+  (loop for node across (dom:child-nodes element)
+        when (and (dom:element-p node) (string= (dom:tag-name node) tag))
+          collect node))
+
+(defun child-named (element tag)
+  (first (children-named element tag)))
+
+(defun attr (element name &optional default)
+  (if (and element (dom:has-attribute element name))
+      (dom:get-attribute element name)
+      default))
+
+(defun numbers (string what &optional count)
+  "Parse the whitespace separated reals of STRING."
+  (let ((values '()) (start 0) (len (length string)))
+    (loop
+      (let ((b (position-if-not (lambda (c) (member c '(#\Space #\Tab #\Newline #\Return))) string :start start)))
+        (unless b (return))
+        (let* ((e (or (position-if (lambda (c) (member c '(#\Space #\Tab #\Newline #\Return))) string :start b) len))
+               (token (subseq string b e))
+               (v (let ((*read-default-float-format* 'double-float))
+                    (handler-case (with-standard-io-syntax
+                                    (let ((*read-default-float-format* 'double-float)
+                                          (*read-eval* nil))
+                                      (read-from-string token)))
+                      (error () nil)))))
+          (unless (realp v) (urdf-fail "~a: ~s is not a number" what token))
+          (push (coerce v 'double-float) values)
+          (setf start e))))
+    (setf values (nreverse values))
+    (when (and count (/= (length values) count))
+      (urdf-fail "~a: expected ~d numbers, got ~s" what count string))
+    values))
+
+(defun rpy->quaternion (r p y)
+  "Quaternion (x y z w) of the fixed-axis roll R, pitch P, yaw Y."
+  (let ((cr (cos (/ r 2))) (sr (sin (/ r 2))) (cp (cos (/ p 2))) (sp (sin (/ p 2)))
+        (cy (cos (/ y 2))) (sy (sin (/ y 2))))
+    (list (- (* sr cp cy) (* cr sp sy))
+          (+ (* cr sp cy) (* sr cp sy))
+          (- (* cr cp sy) (* sr sp cy))
+          (+ (* cr cp cy) (* sr sp sy)))))
+
+(defun parse-origin (element what)
+  (if element
+      (list (numbers (attr element "xyz" "0 0 0") (format nil "~a origin xyz" what) 3)
+            (apply #'rpy->quaternion
+                   (numbers (attr element "rpy" "0 0 0") (format nil "~a origin rpy" what) 3)))
+      (list (list 0d0 0d0 0d0) (list 0d0 0d0 0d0 1d0))))
+
+(defun parse-geometry (element what)
+  (let ((g (and element (find-if #'dom:element-p (dom:child-nodes element)))))
+    (unless g (urdf-fail "~a has no geometry" what))
+    (let ((tag (dom:tag-name g)))
+      (cond ((string= tag "box") (list :box :size (numbers (attr g "size" "") (format nil "~a box size" what) 3)))
+            ((string= tag "cylinder")
+             (list :cylinder :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1))
+                             :length (first (numbers (attr g "length" "") (format nil "~a length" what) 1))))
+            ((string= tag "sphere")
+             (list :sphere :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1))))
+            ((string= tag "mesh")
+             (list :mesh :filename (or (attr g "filename") (urdf-fail "~a mesh without filename" what))
+                         :scale (if (attr g "scale") (numbers (attr g "scale") (format nil "~a scale" what) 3)
+                                    (list 1d0 1d0 1d0))))
+            (t (urdf-fail "~a has unknown geometry <~a>" what tag))))))
+
+(defun parse-link (element materials)
+  (let* ((name (or (attr element "name") (urdf-fail "a <link> has no name")))
+         (link (make-instance 'link :name name)))
+    (setf (slot-value link 'collision)
+          (mapcar (lambda (c) (list :origin (parse-origin (child-named c "origin") name)
+                                    :geometry (parse-geometry (child-named c "geometry") name)))
+                  (children-named element "collision"))
+          (slot-value link 'visual)
+          (mapcar (lambda (v)
+                    (let* ((m (child-named v "material"))
+                           (c (and m (child-named m "color"))))
+                      (list :origin (parse-origin (child-named v "origin") name)
+                            :geometry (parse-geometry (child-named v "geometry") name)
+                            :color (cond (c (numbers (attr c "rgba" "") (format nil "~a color" name) 4))
+                                         (m (gethash (attr m "name" "") materials))))))
+                  (children-named element "visual")))
+    link))
+
+(defun parse-joint (element links)
+  (let* ((name (or (attr element "name") (urdf-fail "a <joint> has no name")))
+         (type (let ((ty (attr element "type")))
+                 (cond ((member ty '("revolute" "continuous" "prismatic" "fixed" "floating" "planar")
+                                :test #'equal)
+                        (intern (string-upcase ty) :keyword))
+                       (t (urdf-fail "joint ~s has type ~s, expected revolute, continuous, prismatic, fixed, floating or planar" name ty)))))
+         (parent-name (attr (child-named element "parent") "link"))
+         (child-name (attr (child-named element "child") "link"))
+         (parent (or (gethash parent-name links) (urdf-fail "joint ~s names unknown parent link ~s" name parent-name)))
+         (child (or (gethash child-name links) (urdf-fail "joint ~s names unknown child link ~s" name child-name)))
+         (limit (child-named element "limit"))
+         (mimic (child-named element "mimic"))
+         (joint (make-instance
+                 'joint :name name :type type :parent parent :child child
+                 :origin (parse-origin (child-named element "origin") name)
+                 :axis (if (child-named element "axis")
+                           (numbers (attr (child-named element "axis") "xyz" "1 0 0") (format nil "~a axis" name) 3)
+                           (list 1d0 0d0 0d0))
+                 :limits (and limit
+                              (list :lower (first (numbers (attr limit "lower" "0") name 1))
+                                    :upper (first (numbers (attr limit "upper" "0") name 1))
+                                    :velocity (first (numbers (attr limit "velocity" "0") name 1))
+                                    :effort (first (numbers (attr limit "effort" "0") name 1))))
+                 :mimic (and mimic
+                             (list :joint (attr mimic "joint")
+                                   :multiplier (first (numbers (attr mimic "multiplier" "1") name 1))
+                                   :offset (first (numbers (attr mimic "offset" "0") name 1)))))))
+    (when (parent-joint child)
+      (urdf-fail "link ~s has two parent joints: ~s and ~s" child-name (name (parent-joint child)) name))
+    (setf (parent-joint child) joint)
+    (push joint (child-joints parent))
+    joint))
+
+(defun parse-urdf (xml)
+  "Parse the URDF text XML (a string, or a pathname of a URDF file) into a ROBOT."
+  (let* ((text (etypecase xml
+                 (string xml)
+                 (pathname (uiop:read-file-string xml))))
+         (doc (handler-case (cxml:parse text (cxml-dom:make-dom-builder))
+                (error (e) (urdf-fail "malformed XML: ~a" e))))
+         (root (dom:document-element doc)))
+    (unless (string= (dom:tag-name root) "robot")
+      (urdf-fail "the document element is <~a>, expected <robot>" (dom:tag-name root)))
+    (let ((materials (make-hash-table :test 'equal))
+          (links (make-hash-table :test 'equal))
+          (joints (make-hash-table :test 'equal)))
+      (dolist (m (children-named root "material"))
+        (let ((c (child-named m "color")))
+          (when c (setf (gethash (attr m "name" "") materials)
+                        (numbers (attr c "rgba" "") "material color" 4)))))
+      (dolist (l (children-named root "link"))
+        (let ((link (parse-link l materials)))
+          (when (gethash (name link) links) (urdf-fail "link ~s is defined twice" (name link)))
+          (setf (gethash (name link) links) link)))
+      (dolist (j (children-named root "joint"))
+        (let ((joint (parse-joint j links)))
+          (setf (gethash (name joint) joints) joint)))
+      (when (zerop (hash-table-count links)) (urdf-fail "the robot has no links"))
+      (let ((roots (loop for l being the hash-values of links unless (parent-joint l) collect l)))
+        (unless (= (length roots) 1)
+          (urdf-fail "expected one root link, found ~d: ~{~s~^, ~}" (length roots) (mapcar #'name roots)))
+        (make-instance 'robot :name (attr root "name" "") :links links :joints joints
+                              :root-link (first roots) :source text)))))
+
+(defun robot-link-names (robot)
+  "Sorted names of the links of ROBOT."
+  (sort (loop for k being the hash-keys of (links robot) collect k) #'string<))
+
+(defun robot-joint-names (robot)
+  "Sorted names of the joints of ROBOT."
+  (sort (loop for k being the hash-keys of (joints robot) collect k) #'string<))

@@ -1,0 +1,104 @@
+;;;; cram-native: contacts, distances, rays and attachments.
+
+(in-package :cram-native)
+
+(defcn "cn_world_contacts" :int (w :int) (th :double) (o4 :pointer) (d :pointer) (cap :int))
+(defcn "cn_object_contacts" :int (w :int) (o :int) (th :double) (o4 :pointer) (d :pointer)
+  (cap :int))
+(defcn "cn_closest_distance" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (maxd :double)
+  (out :pointer))
+(defcn "cn_ignore_pair" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (ignore :int))
+(defcn "cn_ray_test" :int (w :int) (from :pointer) (to :pointer) (n :int) (hit :pointer)
+  (out :pointer))
+(defcn "cn_attach" :int (w :int) (o :int) (p :int) (l :int) (loose :int))
+(defcn "cn_detach" :int (w :int) (o :int) (p :int))
+(defcn "cn_attachments" :int (w :int) (out :pointer) (cap :int))
+
+(defvar *pair-capacity* 256 "Initial capacity of the contact pair buffers.")
+
+(defun %collect-pairs (fn)
+  "Call FN with (ints doubles cap) until the buffers are large enough; return a list of
+(obj-a link-a obj-b link-b distance)."
+  (let ((cap *pair-capacity*))
+    (loop
+      (let ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
+            (dv (make-dvec cap)))
+        (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
+          (when (<= n cap)
+            (return (loop for i below n
+                          collect (list (aref iv (* 4 i)) (aref iv (+ 1 (* 4 i)))
+                                        (aref iv (+ 2 (* 4 i))) (aref iv (+ 3 (* 4 i)))
+                                        (aref dv i)))))
+          (setf cap n))))))
+
+(defun world-contacts (world &key (threshold 0d0))
+  "Every pair of objects of WORLD whose closest distance is <= THRESHOLD (0: touching or
+penetrating), as a list of (object-a link-a object-b link-b distance); links are -1 for
+plain bodies.  Ignored pairs and filtered groups are left out."
+  (let ((th (real-arg threshold 'world-contacts "threshold")))
+    (%collect-pairs (lambda (pi4 pd cap) (ccall "cn_world_contacts" world th pi4 pd cap)))))
+
+(defun object-contacts (world object &key (threshold 0d0))
+  "Contacts of OBJECT (all links of an articulated object) with every other object, as a
+list of (object link other other-link distance)."
+  (let ((th (real-arg threshold 'object-contacts "threshold")))
+    (%collect-pairs (lambda (pi4 pd cap)
+                      (ccall "cn_object_contacts" world object th pi4 pd cap)))))
+
+(defun closest-distance (world object-a object-b &key (link-a -1) (link-b -1) (max-distance 1d0))
+  "Closest distance between OBJECT-A and OBJECT-B (or the given links), searched up to
+MAX-DISTANCE.  Returns the distance (negative = penetration, MAX-DISTANCE when nothing is that
+close), the point on A and the point on B (DVECs of 3), and whether a pair was found."
+  (let* ((v (make-dvec 7))
+         (found (with-vector-pointers ((p v))
+                  (ccall "cn_closest_distance" world object-a link-a object-b link-b
+                         (real-arg max-distance 'closest-distance "max distance") p))))
+    (values (aref v 0) (subseq v 1 4) (subseq v 4 7) (= found 1))))
+
+(defun ignore-pair (world object-a object-b &key (link-a -1) (link-b -1) (ignore t))
+  "Leave the pair out of contacts and physics (IGNORE true) or take it back in.
+Links -1 mean the whole object."
+  (ccall "cn_ignore_pair" world object-a link-a object-b link-b (if ignore 1 0))
+  ignore)
+
+(defun ray-test (world from to)
+  "Cast rays FROM[i] -> TO[i].  FROM and TO are lists of (x y z) or flat DVECs of 3n.
+Returns a list with one entry per ray: NIL for no hit, or (object link fraction point normal)."
+  (flet ((flat (x what)
+           (if (typep x 'dvec) x
+               (to-dvec (loop for p in (coerce x 'list) append (coerce p 'list)) nil 'ray-test what))))
+    (let* ((f (flat from "ray starts")) (g (flat to "ray ends"))
+           (n (floor (length f) 3)))
+      (unless (and (= (length f) (length g)) (zerop (mod (length f) 3)))
+        (arg-error 'ray-test "~d start and ~d end coordinates, expected equal multiples of 3"
+                   (length f) (length g)))
+      (let ((hits (make-array (* 2 n) :element-type '(signed-byte 32)))
+            (out (make-dvec (* 7 n))))
+        (with-vector-pointers ((pf f) (pg g) (ph hits) (po out))
+          (ccall "cn_ray_test" world pf pg n ph po))
+        (loop for i below n
+              collect (and (>= (aref hits (* 2 i)) 0)
+                           (list (aref hits (* 2 i)) (aref hits (1+ (* 2 i)))
+                                 (aref out (* 7 i))
+                                 (subseq out (+ 1 (* 7 i)) (+ 4 (* 7 i)))
+                                 (subseq out (+ 4 (* 7 i)) (+ 7 (* 7 i))))))))))
+
+(defun attach (world object parent &key (link -1) loose)
+  "Attach body OBJECT to PARENT (LINK of an articulated object, or a body with LINK -1).
+Rigid (LOOSE nil): OBJECT keeps its pose relative to the link and follows it; loose: only
+recorded."
+  (ccall "cn_attach" world object parent link (if loose 1 0))
+  t)
+
+(defun detach (world object &optional (parent -1))
+  "Detach OBJECT from PARENT (-1: from everything); return the number of attachments removed."
+  (ccall "cn_detach" world object parent))
+
+(defun attachments (world)
+  "Every attachment of WORLD as a list of (object parent link loose-p)."
+  (let* ((n (ccall "cn_attachments" world (cffi:null-pointer) 0))
+         (v (make-array (max 1 (* 4 n)) :element-type '(signed-byte 32))))
+    (with-vector-pointers ((p v)) (ccall "cn_attachments" world p n))
+    (loop for i below n
+          collect (list (aref v (* 4 i)) (aref v (+ 1 (* 4 i))) (aref v (+ 2 (* 4 i)))
+                        (= 1 (aref v (+ 3 (* 4 i))))))))

@@ -1,0 +1,140 @@
+;;;; cram-native: URDF articulated objects (robots, kitchens).
+
+(in-package :cram-native)
+
+(defcn "cn_robot_add_urdf" :int (w :int) (xml :string) (pose :pointer) (flags :int))
+(defcn "cn_robot_name" :int (w :int) (r :int) (out :pointer))
+(defcn "cn_robot_num_links" :int (w :int) (r :int))
+(defcn "cn_robot_num_joints" :int (w :int) (r :int))
+(defcn "cn_robot_root_link" :int (w :int) (r :int))
+(defcn "cn_robot_link_name" :int (w :int) (r :int) (i :int) (out :pointer))
+(defcn "cn_robot_joint_name" :int (w :int) (r :int) (i :int) (out :pointer))
+(defcn "cn_robot_link_index" :int (w :int) (r :int) (name :string))
+(defcn "cn_robot_joint_index" :int (w :int) (r :int) (name :string))
+(defcn "cn_robot_joint_info" :int (w :int) (r :int) (j :int) (oi :pointer) (od :pointer))
+(defcn "cn_robot_link_parent_joint" :int (w :int) (r :int) (l :int))
+(defcn "cn_robot_link_has_body" :int (w :int) (r :int) (l :int))
+(defcn "cn_robot_set_joints" :int (w :int) (r :int) (j :pointer) (v :pointer) (n :int))
+(defcn "cn_robot_get_joints" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_link_poses" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
+(defcn "cn_robot_set_self_collision" :int (w :int) (r :int) (on :int))
+
+(defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes)
+  "Add the articulated object described by URDF-STRING at base POSE: one kinematic body per
+link with collision geometry, every joint at 0.  EXACT-MESHES: collision meshes as exact
+triangle meshes (for static environments) instead of convex hulls.  Returns its handle."
+  (with-pose-pointer (p pose 'add-urdf)
+    (ccall "cn_robot_add_urdf" world (string-arg urdf-string 'add-urdf "URDF") p
+           (if exact-meshes 1 0))))
+
+(defun %name-out (fn world robot index)
+  (cffi:with-foreign-object (out :pointer)
+    (funcall fn world robot index out)
+    (cffi:foreign-string-to-lisp (cffi:mem-ref out :pointer))))
+
+(defun robot-name (world robot)
+  "Name of ROBOT's URDF model."
+  (cffi:with-foreign-object (out :pointer)
+    (ccall "cn_robot_name" world robot out)
+    (cffi:foreign-string-to-lisp (cffi:mem-ref out :pointer))))
+
+(defun robot-link-count (world robot)
+  "Number of links of ROBOT."
+  (ccall "cn_robot_num_links" world robot))
+
+(defun robot-joint-count (world robot)
+  "Number of joints of ROBOT (fixed ones included)."
+  (ccall "cn_robot_num_joints" world robot))
+
+(defun robot-root-link (world robot)
+  "Index of ROBOT's root link."
+  (ccall "cn_robot_root_link" world robot))
+
+(defun robot-link-name (world robot link)
+  "Name of link index LINK of ROBOT."
+  (%name-out (lambda (w r i o) (ccall "cn_robot_link_name" w r i o)) world robot link))
+
+(defun robot-joint-name (world robot joint)
+  "Name of joint index JOINT of ROBOT."
+  (%name-out (lambda (w r i o) (ccall "cn_robot_joint_name" w r i o)) world robot joint))
+
+(defun robot-link-names (world robot)
+  "Names of ROBOT's links in index order (root first)."
+  (loop for i below (robot-link-count world robot) collect (robot-link-name world robot i)))
+
+(defun robot-joint-names (world robot)
+  "Names of ROBOT's joints in index order (parents before children)."
+  (loop for i below (robot-joint-count world robot) collect (robot-joint-name world robot i)))
+
+(defun robot-link-index (world robot name)
+  "Index of the link called NAME in ROBOT; a NATIVE-ERROR names an unknown link."
+  (ccall "cn_robot_link_index" world robot (string-arg name 'robot-link-index "link name")))
+
+(defun robot-joint-index (world robot name)
+  "Index of the joint called NAME in ROBOT; a NATIVE-ERROR names an unknown joint."
+  (ccall "cn_robot_joint_index" world robot (string-arg name 'robot-joint-index "joint name")))
+
+(defun robot-joint-info (world robot joint)
+  "Property list describing JOINT: :type (:fixed :revolute :continuous :prismatic :floating
+:planar), :parent and :child link indices, :mimic (joint index or NIL), :lower, :upper,
+:velocity, :effort, :axis (x y z), :multiplier, :offset."
+  (let ((iv (make-array 4 :element-type '(signed-byte 32)))
+        (dv (make-dvec 9)))
+    (with-vector-pointers ((p-i iv) (p-d dv)) (ccall "cn_robot_joint_info" world robot joint p-i p-d))
+    (list :type (nth (aref iv 0) '(:fixed :revolute :continuous :prismatic :floating :planar))
+          :parent (aref iv 1) :child (aref iv 2) :mimic (and (>= (aref iv 3) 0) (aref iv 3))
+          :lower (aref dv 0) :upper (aref dv 1) :velocity (aref dv 2) :effort (aref dv 3)
+          :axis (list (aref dv 4) (aref dv 5) (aref dv 6))
+          :multiplier (aref dv 7) :offset (aref dv 8))))
+
+(defun robot-link-parent-joint (world robot link)
+  "Index of the joint whose child is LINK, or NIL for the root."
+  (let ((j (ccall "cn_robot_link_parent_joint" world robot link)))
+    (and (>= j 0) j)))
+
+(defun robot-link-has-body-p (world robot link)
+  "True if LINK has collision geometry (a rigid body)."
+  (= 1 (ccall "cn_robot_link_has_body" world robot link)))
+
+(defun set-robot-joints (world robot joints values)
+  "Set the joints JOINTS (a sequence of joint indices, an IVEC for speed) to VALUES (a
+sequence of reals, a DVEC for speed), then update every link body and attached object once.
+Mimic joints follow their leader; fixed joints ignore the value."
+  (let ((jv (to-ivec joints 'set-robot-joints "joint indices"))
+        (vv (to-dvec values nil 'set-robot-joints "joint values")))
+    (declare (type ivec jv) (type dvec vv))
+    (unless (= (length jv) (length vv))
+      (arg-error 'set-robot-joints "~d joint indices but ~d values" (length jv) (length vv)))
+    (with-vector-pointers ((pj jv) (pv vv))
+      (ccall "cn_robot_set_joints" world robot pj pv (length jv)))
+    t))
+
+(defun robot-joints (world robot &optional out)
+  "Every joint value of ROBOT (index order, mimic joints computed) as a DVEC (or into OUT)."
+  (let* ((n (ccall "cn_robot_num_joints" world robot))
+         (v (or out (make-dvec n))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_get_joints" world robot p (length v)))
+    v))
+
+(defun robot-link-poses (world robot &optional out)
+  "Poses of all links of ROBOT as one DVEC, 7 per link in index order (or into OUT)."
+  (let* ((n (ccall "cn_robot_num_links" world robot))
+         (v (or out (make-dvec (* 7 n)))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v))
+      (ccall "cn_robot_link_poses" world robot p (floor (length v) 7)))
+    v))
+
+(defun robot-link-pose (world robot link &optional out)
+  "World pose of LINK (an index) of ROBOT as a DVEC of 7 (or into OUT)."
+  (let ((v (or out (make-dvec 7))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_link_pose" world robot link p))
+    v))
+
+(defun set-robot-self-collision (world robot enabled)
+  "Whether ROBOT's links are checked against each other (default: no)."
+  (ccall "cn_robot_set_self_collision" world robot (if enabled 1 0))
+  enabled)

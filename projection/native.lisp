@@ -1,0 +1,176 @@
+;;;; cram-native: CFFI binding of libcram_native.so (see native/cram_native.h).
+;;;; This file: package, library loading, error condition, argument conversion helpers.
+
+(defpackage :cram-native
+  (:use :cl)
+  (:export
+   ;; errors and the library
+   #:native-error #:native-error-function #:native-error-code #:native-error-message
+   #:with-float-traps-masked* #:library-directory #:native-version
+   #:add-package-path #:add-search-dir #:clear-search-paths #:resolve-path
+   ;; worlds
+   #:make-world #:destroy-world #:copy-world #:world-alive-p #:world-count
+   #:world-gravity #:set-world-gravity #:step-world #:simulate #:world-object-count
+   #:world-body-count #:world-objects #:with-world
+   ;; objects and bodies
+   #:object-kind #:remove-object #:object-pose #:set-object-pose #:object-poses
+   #:set-object-poses #:object-color #:set-object-color #:object-collision-filter
+   #:set-object-collision-filter #:object-aabb #:object-active-p
+   #:add-plane #:add-box #:add-sphere #:add-cylinder #:add-cone #:add-mesh #:add-convex-hull
+   #:body-velocity #:set-body-velocity #:body-mass #:body-shape
+   ;; articulated objects
+   #:add-urdf #:robot-name #:robot-link-count #:robot-joint-count #:robot-root-link
+   #:robot-link-name #:robot-joint-name #:robot-link-names #:robot-joint-names
+   #:robot-link-index #:robot-joint-index #:robot-joint-info #:robot-link-parent-joint
+   #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-link-poses
+   #:robot-link-pose #:set-robot-self-collision
+   ;; queries
+   #:world-contacts #:object-contacts #:closest-distance #:ignore-pair #:ray-test
+   #:attach #:detach #:attachments
+   ;; rendering
+   #:render #:render-png #:write-png #:look-at #:visibility
+   ;; inverse kinematics
+   #:make-chain #:destroy-chain #:chain-joint-count #:chain-joints #:chain-limits #:chain-fk
+   #:chain-ik))
+
+(in-package :cram-native)
+
+(defun library-directory ()
+  "Directory holding libcram_native.so (projection/native/build/ of the cram-native system)."
+  (asdf:system-relative-pathname "cram-native" "projection/native/build/"))
+
+(let ((lib (merge-pathnames "libcram_native.so" (library-directory))))
+  (unless (probe-file lib)
+    (error "~a is missing: build it with `make -C projection/native' first." lib))
+  (cffi:load-foreign-library lib))
+
+(defmacro with-float-traps-masked* (&body body)
+  "Run BODY with every SBCL floating point trap masked (OSMesa/llvmpipe and FCL raise
+floating point exceptions inside foreign calls otherwise)."
+  `(sb-int:with-float-traps-masked (:invalid :divide-by-zero :overflow :inexact :underflow)
+     ,@body))
+
+(define-condition native-error (error)
+  ((function :initarg :function :reader native-error-function
+             :documentation "Name of the shim function (a string) or Lisp function that failed.")
+   (code :initarg :code :reader native-error-code
+         :documentation "Negative status code: -1 handle, -2 argument, -3 name, -4 file,
+-5 parse, -6 state, -7 render, -8 internal.")
+   (message :initarg :message :reader native-error-message
+            :documentation "Text naming the bad value."))
+  (:report (lambda (c s)
+             (format s "~a: ~a" (native-error-function c) (native-error-message c))))
+  (:documentation "Signalled when a call of the native shim fails or its arguments are invalid."))
+
+(cffi:defcfun ("cn_last_error" %last-error) :string)
+(cffi:defcfun ("cn_version" %version) :int)
+
+(defun signal-native-error (function code)
+  (error 'native-error :function function :code code :message (%last-error)))
+
+(defun arg-error (function fmt &rest args)
+  "Signal a NATIVE-ERROR with code -2 for a bad argument detected on the Lisp side."
+  (error 'native-error :function function :code -2 :message (apply #'format nil fmt args)))
+
+(defmacro ccall (cname &rest args)
+  "Call the foreign function of CNAME with ARGS, traps masked; signal NATIVE-ERROR on a
+negative result, else return the result."
+  (let ((r (gensym "R")) (sym (intern (format nil "%~:@(~a~)" (substitute #\- #\_ cname)))))
+    `(let ((,r (with-float-traps-masked* (,sym ,@args))))
+       (declare (type (signed-byte 32) ,r))
+       (if (minusp ,r) (signal-native-error ,cname ,r) ,r))))
+
+(defmacro defcn (cname ret &rest args)
+  "Define the raw foreign function %NAME for the shim function CNAME."
+  `(cffi:defcfun (,cname ,(intern (format nil "%~:@(~a~)" (substitute #\- #\_ cname))))
+       ,ret ,@args))
+
+(defun native-version ()
+  "Version of the loaded shim as 10000*major + 100*minor + patch."
+  (with-float-traps-masked* (%version)))
+
+;;; ---- argument conversion -------------------------------------------------------------
+
+(deftype dvec () '(simple-array double-float (*)))
+(deftype ivec () '(simple-array (signed-byte 32) (*)))
+
+(defun to-dvec (x n function what)
+  "X (a sequence of N reals or a DVEC) as a fresh or the same DVEC of length N."
+  (cond ((and (typep x 'dvec) (or (null n) (= (length x) n))) x)
+        ((and (typep x 'sequence) (or (null n) (= (length x) n))
+              (every #'realp x))
+         (map 'dvec (lambda (v) (coerce v 'double-float)) x))
+        (t (arg-error function "~a is ~s, expected ~:[a sequence of reals~;~:*~d reals~]"
+                      what x n))))
+
+(defun pose-vec (pose function &optional (what "pose"))
+  "POSE as a DVEC of 7: accepts a DVEC/sequence x y z qx qy qz qw or ((x y z) (qx qy qz qw))."
+  (cond ((and (typep pose 'dvec) (= (length pose) 7)) pose)
+        ((and (consp pose) (= (length pose) 2) (listp (first pose)) (listp (second pose))
+              (= (length (first pose)) 3) (= (length (second pose)) 4))
+         (to-dvec (append (first pose) (second pose)) 7 function what))
+        (t (to-dvec pose 7 function what))))
+
+(defun to-ivec (x function what)
+  "X (a sequence of integers) as an IVEC."
+  (cond ((typep x 'ivec) x)
+        ((and (typep x 'sequence) (every (lambda (v) (typep v '(signed-byte 32))) x))
+         (map 'ivec #'identity x))
+        (t (arg-error function "~a is ~s, expected a sequence of integers" what x))))
+
+(defmacro with-vector-pointers (bindings &body body)
+  "Bind each (VAR VECTOR) to a pointer to the data of the specialized simple VECTOR (pinned)."
+  `(sb-sys:with-pinned-objects ,(mapcar #'second bindings)
+     (let ,(mapcar (lambda (b) `(,(first b) (sb-sys:vector-sap ,(second b)))) bindings)
+       ,@body)))
+
+(defun make-dvec (n)
+  (make-array n :element-type 'double-float :initial-element 0d0))
+
+(defun real-arg (x function what)
+  (if (realp x) (coerce x 'double-float)
+      (arg-error function "~a is ~s, expected a real number" what x)))
+
+(defun int-arg (x function what)
+  (if (typep x '(signed-byte 32)) x
+      (arg-error function "~a is ~s, expected an integer handle or index" what x)))
+
+(defun string-arg (x function what)
+  (if (stringp x) x
+      (arg-error function "~a is ~s, expected a string" what x)))
+
+(defun path-arg (x function what)
+  (cond ((stringp x) x)
+        ((pathnamep x) (namestring x))
+        (t (arg-error function "~a is ~s, expected a string or pathname" what x))))
+
+;;; ---- search paths ---------------------------------------------------------------------
+
+(defcn "cn_add_package_path" :int (name :string) (dir :string))
+(defcn "cn_add_search_dir" :int (dir :string))
+(defcn "cn_clear_search_paths" :int)
+(defcn "cn_resolve_path" :int (uri :string) (base :string) (out :pointer) (cap :int))
+
+(defun add-package-path (name directory)
+  "Resolve package://NAME/... URIs to files under DIRECTORY."
+  (ccall "cn_add_package_path" (string-arg name 'add-package-path "package name")
+         (path-arg directory 'add-package-path "directory"))
+  t)
+
+(defun add-search-dir (directory)
+  "Look for package://NAME/... in DIRECTORY/NAME/ (and relative mesh paths in DIRECTORY)."
+  (ccall "cn_add_search_dir" (path-arg directory 'add-search-dir "directory"))
+  t)
+
+(defun clear-search-paths ()
+  "Forget every package path and search directory added from Lisp."
+  (ccall "cn_clear_search_paths")
+  t)
+
+(defun resolve-path (uri &optional base-directory)
+  "The existing file URI (package://, file:// or a path, relative to BASE-DIRECTORY) names."
+  (cffi:with-foreign-pointer-as-string ((buf size) 4096)
+    (ccall "cn_resolve_path" (path-arg uri 'resolve-path "path")
+           (if base-directory (path-arg base-directory 'resolve-path "base directory")
+               (cffi:null-pointer))
+           buf size)))

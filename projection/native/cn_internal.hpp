@@ -1,0 +1,198 @@
+// Internal data structures of libcram_native.
+#pragma once
+#include "cram_native.h"
+
+#include <btBulletDynamicsCommon.h>
+#include <cmath>
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace cn {
+
+// ---- errors --------------------------------------------------------------------------------
+struct Error : std::exception {
+  int code;
+  std::string msg;
+  Error(int c, std::string m) : code(c), msg(std::move(m)) {}
+  const char *what() const noexcept override { return msg.c_str(); }
+};
+[[noreturn]] void fail(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+int set_error(int code, const std::string &msg);
+void clear_error();
+int guard_exception();  // call inside catch(...): converts the active exception to a status
+
+template <class F> inline int guard(F &&f) {
+  try {
+    return f();
+  } catch (...) {
+    return guard_exception();
+  }
+}
+
+// ---- argument checks -----------------------------------------------------------------------
+void check_ptr(const void *p, const char *what);
+double check_finite(double v, const char *what);
+double check_positive(double v, const char *what);     // finite and > 0
+double check_nonneg(double v, const char *what);       // finite and >= 0
+btTransform read_pose(const double *p7, const char *what = "pose");
+void write_pose(const btTransform &t, double *out7);
+std::string check_str(const char *s, const char *what);
+
+// ---- render geometry (shared, immutable) ------------------------------------------------------
+struct RenderMesh {
+  uint64_t id;                  // unique, never reused
+  std::vector<float> pos;       // 9 per triangle
+  std::vector<float> nrm;       // 9 per triangle
+  RenderMesh();
+};
+using RenderMeshP = std::shared_ptr<const RenderMesh>;
+
+struct RenderItem {
+  RenderMeshP mesh;
+  btTransform local;            // relative to the body / link frame
+  btVector3 scale{1, 1, 1};
+  float rgba[4] = {0.5f, 0.5f, 0.5f, 1.0f};
+  bool has_color = false;       // colour from the model (URDF material)
+};
+
+// unit primitives for drawing
+RenderMeshP unit_box();         // [-0.5, 0.5]^3
+RenderMeshP unit_sphere();      // radius 1
+RenderMeshP unit_cylinder();    // radius 1, z in [-0.5, 0.5]
+RenderMeshP unit_cone();        // radius 1 at z=-0.5, apex at z=0.5
+RenderMeshP plane_quad();       // 200 m x 200 m in the xy plane
+
+// ---- collision shapes (shared between worlds, immutable) ----------------------------------------
+struct Shape {
+  btCollisionShape *shape = nullptr;
+  std::vector<btCollisionShape *> children;   // owned sub-shapes
+  std::vector<std::shared_ptr<Shape>> refs;   // shared sub-shapes kept alive
+  btTriangleMesh *trimesh = nullptr;          // owned for triangle-mesh shapes
+  std::vector<RenderItem> draw;               // render geometry in the shape frame
+  int kind = 0;
+  double dims[4] = {0, 0, 0, 0};
+  ~Shape();
+};
+using ShapeP = std::shared_ptr<Shape>;
+
+ShapeP make_plane(const btVector3 &n, double c);
+ShapeP make_box(double sx, double sy, double sz);
+ShapeP make_sphere(double r);
+ShapeP make_cylinder(double r, double h);
+ShapeP make_cone(double r, double h);
+ShapeP make_hull(const double *pts, int n);
+ShapeP load_mesh(const std::string &path, const btVector3 &scale, bool exact);  // cached
+RenderMeshP load_render_mesh(const std::string &path, const btVector3 &scale);   // cached
+double shape_margin();
+std::string resolve_path(const std::string &uri, const std::string &base_dir);
+
+// ---- URDF model (shared, immutable) ---------------------------------------------------------
+struct JointM {
+  std::string name;
+  int type = CN_JOINT_FIXED;
+  int parent = -1, child = -1, mimic = -1;
+  btTransform origin;
+  btVector3 axis{1, 0, 0};
+  double lower = 0, upper = 0, velocity = 0, effort = 0, mult = 1, offset = 0;
+};
+struct LinkM {
+  std::string name;
+  int parent_joint = -1;
+  ShapeP collision;               // null: no rigid body
+  std::vector<RenderItem> visual; // visual geometry (or collision geometry when absent)
+};
+struct Model {
+  std::string name;
+  std::vector<LinkM> links;
+  std::vector<JointM> joints;
+  std::vector<int> order;         // joints in topological order
+  int root = 0;
+  std::unordered_map<std::string, int> link_index, joint_index;
+};
+using ModelP = std::shared_ptr<const Model>;
+ModelP parse_urdf(const std::string &xml, bool exact_meshes);
+
+// ---- objects and worlds --------------------------------------------------------------------
+struct World;
+struct Object {
+  int id = -1;
+  int kind = CN_BODY;
+  int group = 1, mask = -1;
+  // body
+  btRigidBody *rb = nullptr;
+  ShapeP shape;
+  double mass = 0;
+  float rgba[4] = {0.5f, 0.5f, 0.5f, 1.0f};
+  bool attached_kinematic = false;   // made kinematic by a rigid attachment
+  // articulated object
+  ModelP model;
+  btTransform base = btTransform::getIdentity();
+  std::vector<double> q;
+  std::vector<btTransform> link_pose;
+  std::vector<btRigidBody *> link_rb;           // null for links without collision
+  std::vector<std::array<float, 4>> link_rgba;  // override colour (a < 0: model colours)
+  bool self_collision = false;
+};
+
+struct Attachment {
+  int obj, parent, link;
+  bool loose;
+  btTransform rel;   // parent frame -> obj
+};
+
+class Dispatcher;
+struct World {
+  btDefaultCollisionConfiguration *config = nullptr;
+  Dispatcher *dispatcher = nullptr;
+  btBroadphaseInterface *broadphase = nullptr;
+  btSequentialImpulseConstraintSolver *solver = nullptr;
+  btDiscreteDynamicsWorld *dw = nullptr;
+  std::vector<Object *> objects;          // index = handle; null = removed
+  std::vector<Attachment> attachments;
+  std::set<std::array<int, 4>> ignored;   // (objA, linkA, objB, linkB), A <= B
+  World(const btVector3 &gravity);
+  ~World();
+  Object &obj(int h, const char *what = "object");
+  Object &body(int h);
+  Object &robot(int h);
+  bool pair_ignored(int oa, int la, int ob, int lb) const;
+};
+
+World &world(int h);
+int world_register(World *w);
+void world_unregister(int h);
+
+// operations used across files
+btRigidBody *new_body(World &w, Object &o, const ShapeP &s, double mass, const btTransform &t);
+void add_rb(World &w, btRigidBody *rb, int group, int mask);
+void teleport_rb(World &w, btRigidBody *rb, const btTransform &t);
+void set_object_pose(World &w, Object &o, const btTransform &t);
+btTransform object_pose(const Object &o);
+btTransform frame_pose(const Object &o, int link);   // link pose or body pose
+void robot_fk(World &w, Object &o);
+void compute_link_poses(const Object &o, std::vector<btTransform> &out);
+void set_query_all(World &w, bool on);
+void move_attached(World &w, int parent, int depth = 0);
+void robot_new_bodies(World &w, Object &o);
+void remove_object_bodies(World &w, Object &o);
+void for_each_rb(const Object &o, const std::function<void(btRigidBody *, int)> &f);
+
+inline void decode_rb(const btCollisionObject *co, int &obj, int &link) {
+  obj = co->getUserIndex();
+  link = co->getUserIndex2();
+}
+
+std::string fmt(const char *f, ...) __attribute__((format(printf, 1, 2)));
+// a number for messages: NaN, inf, -inf or %g
+std::string num(double v);
+
+}  // namespace cn

@@ -1,0 +1,345 @@
+// Contacts, closest distances, ignored pairs, ray batches and attachments.
+#include "cn_internal.hpp"
+
+#include <algorithm>
+
+namespace cn {
+
+using PairKey = std::array<int, 4>;
+
+static PairKey make_key(int oa, int la, int ob, int lb) {
+  if (oa > ob || (oa == ob && la > lb)) return {ob, lb, oa, la};
+  return {oa, la, ob, lb};
+}
+
+static int write_pairs(const std::map<PairKey, double> &pairs, int *out4, double *dist, int cap) {
+  int n = 0;
+  for (auto &p : pairs) {
+    if (n < cap) {
+      for (int k = 0; k < 4; ++k) out4[4 * n + k] = p.first[k];
+      dist[n] = p.second;
+    }
+    ++n;
+  }
+  return n;
+}
+
+static void check_out(int cap, const void *a, const void *b) {
+  if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+  if (cap > 0) {
+    check_ptr(a, "pair output");
+    check_ptr(b, "distance output");
+  }
+}
+
+struct ObjectContacts : btCollisionWorld::ContactResultCallback {
+  World &w;
+  int self;
+  double threshold;
+  std::map<PairKey, double> &pairs;
+  ObjectContacts(World &wd, int s, double t, std::map<PairKey, double> &p, int group, int mask)
+      : w(wd), self(s), threshold(t), pairs(p) {
+    m_collisionFilterGroup = group;
+    m_collisionFilterMask = mask;
+    m_closestDistanceThreshold = t > 0 ? t : 0;
+  }
+  bool needsCollision(btBroadphaseProxy *proxy) const override {
+    if (!ContactResultCallback::needsCollision(proxy)) return false;
+    auto *co = static_cast<btCollisionObject *>(proxy->m_clientObject);
+    return co->getUserIndex() != self;
+  }
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *a, int, int,
+                           const btCollisionObjectWrapper *b, int, int) override {
+    if (cp.getDistance() > threshold) return 0;
+    int oa, la, ob, lb;
+    decode_rb(a->getCollisionObject(), oa, la);
+    decode_rb(b->getCollisionObject(), ob, lb);
+    if (oa != self) { std::swap(oa, ob); std::swap(la, lb); }
+    if (w.pair_ignored(oa, la, ob, lb)) return 0;
+    PairKey k{oa, la, ob, lb};
+    auto it = pairs.find(k);
+    if (it == pairs.end()) pairs[k] = cp.getDistance();
+    else it->second = std::min(it->second, (double)cp.getDistance());
+    return 0;
+  }
+};
+
+struct PairDistance : btCollisionWorld::ContactResultCallback {
+  const btCollisionObject *a;
+  double best;
+  btVector3 pa, pb;
+  bool found = false;
+  PairDistance(const btCollisionObject *ca, double maxd) : a(ca), best(maxd) {
+    m_closestDistanceThreshold = maxd;
+  }
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *w0, int, int,
+                           const btCollisionObjectWrapper *, int, int) override {
+    if (cp.getDistance() < best || !found) {
+      if (cp.getDistance() > best) return 0;
+      best = cp.getDistance();
+      bool a_first = w0->getCollisionObject() == a;
+      pa = a_first ? cp.getPositionWorldOnA() : cp.getPositionWorldOnB();
+      pb = a_first ? cp.getPositionWorldOnB() : cp.getPositionWorldOnA();
+      found = true;
+    }
+    return 0;
+  }
+};
+
+static void check_link(const Object &o, int link) {
+  if (o.kind == CN_BODY && link != -1)
+    fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, o.id);
+  if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
+    fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
+         (int)o.link_rb.size() - 1, o.id);
+}
+
+static bool reaches(World &w, int from, int target, int depth) {
+  if (from == target) return true;
+  if (depth > 32) return true;
+  for (auto &a : w.attachments)
+    if (a.obj == from && reaches(w, a.parent, target, depth + 1)) return true;
+  return false;
+}
+
+static void restore_dynamic(World &w, Object &c) {
+  if (!c.attached_kinematic || !c.rb) return;
+  for (auto &a : w.attachments)
+    if (a.obj == c.id && !a.loose) return;  // still rigidly held elsewhere
+  c.rb->setCollisionFlags(c.rb->getCollisionFlags() & ~btCollisionObject::CF_KINEMATIC_OBJECT);
+  btVector3 in(0, 0, 0);
+  c.shape->shape->calculateLocalInertia(c.mass, in);
+  c.rb->setMassProps(c.mass, in);
+  c.rb->updateInertiaTensor();
+  c.rb->setGravity(w.dw->getGravity());
+  c.rb->setLinearVelocity(btVector3(0, 0, 0));
+  c.rb->setAngularVelocity(btVector3(0, 0, 0));
+  c.rb->forceActivationState(ACTIVE_TAG);
+  c.rb->activate(true);
+  c.attached_kinematic = false;
+}
+
+}  // namespace cn
+
+using namespace cn;
+
+extern "C" {
+
+int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap) {
+  return guard([&] {
+    World &w = world(wh);
+    check_finite(threshold, "contact threshold");
+    check_out(cap, out4, dist);
+    set_query_all(w, true);
+    try {
+      w.dw->performDiscreteCollisionDetection();
+    } catch (...) {
+      set_query_all(w, false);
+      throw;
+    }
+    set_query_all(w, false);
+    std::map<PairKey, double> pairs;
+    btDispatcher *d = w.dw->getDispatcher();
+    for (int i = 0; i < d->getNumManifolds(); ++i) {
+      btPersistentManifold *m = d->getManifoldByIndexInternal(i);
+      if (m->getNumContacts() == 0) continue;
+      double md = BT_LARGE_FLOAT;
+      for (int k = 0; k < m->getNumContacts(); ++k) md = std::min(md, (double)m->getContactPoint(k).getDistance());
+      if (md > threshold) continue;
+      int oa, la, ob, lb;
+      decode_rb(m->getBody0(), oa, la);
+      decode_rb(m->getBody1(), ob, lb);
+      if (w.pair_ignored(oa, la, ob, lb)) continue;
+      PairKey k = make_key(oa, la, ob, lb);
+      auto it = pairs.find(k);
+      if (it == pairs.end()) pairs[k] = md;
+      else it->second = std::min(it->second, md);
+    }
+    return write_pairs(pairs, out4, dist, cap);
+  });
+}
+
+int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist, int cap) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &o = w.obj(oh);
+    check_finite(threshold, "contact threshold");
+    check_out(cap, out4, dist);
+    std::map<PairKey, double> pairs;
+    for_each_rb(o, [&](btRigidBody *rb, int) {
+      auto *bp = rb->getBroadphaseHandle();
+      ObjectContacts cb(w, oh, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
+      w.dw->contactTest(rb, cb);
+    });
+    if (o.kind == CN_ARTICULATED && o.self_collision) {
+      for (size_t i = 0; i < o.link_rb.size(); ++i)
+        for (size_t j = i + 1; j < o.link_rb.size(); ++j) {
+          if (!o.link_rb[i] || !o.link_rb[j]) continue;
+          const JointM *pj = nullptr;
+          int a = (int)i, b = (int)j;
+          int jb = o.model->links[b].parent_joint, ja = o.model->links[a].parent_joint;
+          if ((jb >= 0 && o.model->joints[jb].parent == a) || (ja >= 0 && o.model->joints[ja].parent == b))
+            continue;  // adjacent links always touch
+          (void)pj;
+          if (w.ignored.count(make_key(oh, a, oh, b))) continue;
+          PairDistance pd(o.link_rb[i], threshold);
+          w.dw->contactPairTest(o.link_rb[i], o.link_rb[j], pd);
+          if (pd.found && pd.best <= threshold) pairs[{oh, a, oh, b}] = pd.best;
+        }
+    }
+    return write_pairs(pairs, out4, dist, cap);
+  });
+}
+
+int cn_closest_distance(int wh, int oa, int la, int ob, int lb, double maxd, double *out7) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &a = w.obj(oa, "object A");
+    Object &b = w.obj(ob, "object B");
+    check_link(a, la);
+    check_link(b, lb);
+    check_positive(maxd, "maximum distance");
+    check_ptr(out7, "distance output");
+    double best = maxd;
+    btVector3 pa(0, 0, 0), pb(0, 0, 0);
+    bool found = false;
+    for_each_rb(a, [&](btRigidBody *ra, int l1) {
+      if (la >= 0 && l1 != la) return;
+      for_each_rb(b, [&](btRigidBody *rb, int l2) {
+        if (lb >= 0 && l2 != lb) return;
+        if (ra == rb) return;
+        PairDistance pd(ra, best);
+        w.dw->contactPairTest(ra, rb, pd);
+        if (pd.found && pd.best <= best) {
+          best = pd.best;
+          pa = pd.pa;
+          pb = pd.pb;
+          found = true;
+        }
+      });
+    });
+    out7[0] = best;
+    for (int k = 0; k < 3; ++k) { out7[1 + k] = pa[k]; out7[4 + k] = pb[k]; }
+    return found ? 1 : 0;
+  });
+}
+
+int cn_ignore_pair(int wh, int oa, int la, int ob, int lb, int ignore) {
+  return guard([&] {
+    World &w = world(wh);
+    check_link(w.obj(oa, "object A"), la);
+    check_link(w.obj(ob, "object B"), lb);
+    PairKey k = make_key(oa, la, ob, lb);
+    if (ignore) w.ignored.insert(k);
+    else w.ignored.erase(k);
+    return 0;
+  });
+}
+
+int cn_ray_test(int wh, const double *from, const double *to, int n, int *hit, double *out) {
+  return guard([&] {
+    World &w = world(wh);
+    if (n < 0) fail(CN_E_ARG, "ray count %d, expected >= 0", n);
+    if (n == 0) return 0;
+    check_ptr(from, "ray start array");
+    check_ptr(to, "ray end array");
+    check_ptr(hit, "ray hit output");
+    check_ptr(out, "ray result output");
+    for (int i = 0; i < 3 * n; ++i) {
+      if (!std::isfinite(from[i])) fail(CN_E_ARG, "ray %d start has %s in component %d", i / 3, num(from[i]).c_str(), i % 3);
+      if (!std::isfinite(to[i])) fail(CN_E_ARG, "ray %d end has %s in component %d", i / 3, num(to[i]).c_str(), i % 3);
+    }
+    int hits = 0;
+    for (int i = 0; i < n; ++i) {
+      btVector3 f(from[3 * i], from[3 * i + 1], from[3 * i + 2]), t(to[3 * i], to[3 * i + 1], to[3 * i + 2]);
+      btCollisionWorld::ClosestRayResultCallback cb(f, t);
+      cb.m_collisionFilterGroup = -1;
+      cb.m_collisionFilterMask = -1;
+      if ((t - f).length2() > 0) w.dw->rayTest(f, t, cb);
+      double *o = out + 7 * i;
+      if (cb.hasHit()) {
+        decode_rb(cb.m_collisionObject, hit[2 * i], hit[2 * i + 1]);
+        o[0] = cb.m_closestHitFraction;
+        for (int k = 0; k < 3; ++k) { o[1 + k] = cb.m_hitPointWorld[k]; o[4 + k] = cb.m_hitNormalWorld[k]; }
+        ++hits;
+      } else {
+        hit[2 * i] = hit[2 * i + 1] = -1;
+        o[0] = 1;
+        for (int k = 0; k < 3; ++k) { o[1 + k] = t[k]; o[4 + k] = 0; }
+      }
+    }
+    return hits;
+  });
+}
+
+int cn_attach(int wh, int oh, int ph, int link, int loose) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &o = w.obj(oh, "attached object");
+    Object &p = w.obj(ph, "parent object");
+    if (o.kind != CN_BODY) fail(CN_E_HANDLE, "object %d is an articulated object; only bodies can be attached", oh);
+    if (p.kind == CN_ARTICULATED && link < 0)
+      fail(CN_E_HANDLE, "attaching to articulated object %d needs a link index, got %d", ph, link);
+    check_link(p, link);
+    if (oh == ph) fail(CN_E_STATE, "object %d cannot be attached to itself", oh);
+    if (reaches(w, ph, oh, 0))
+      fail(CN_E_STATE, "attaching object %d to object %d would form a cycle", oh, ph);
+    btTransform rel = frame_pose(p, link).inverse() * o.rb->getWorldTransform();
+    bool found = false;
+    for (auto &a : w.attachments)
+      if (a.obj == oh && a.parent == ph && a.link == link) {
+        a.loose = loose != 0;
+        a.rel = rel;
+        found = true;
+      }
+    if (!found) w.attachments.push_back({oh, ph, link, loose != 0, rel});
+    if (!loose && !o.rb->isStaticOrKinematicObject()) {
+      o.rb->setCollisionFlags(o.rb->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+      o.rb->setMassProps(0, btVector3(0, 0, 0));
+      o.rb->setLinearVelocity(btVector3(0, 0, 0));
+      o.rb->setAngularVelocity(btVector3(0, 0, 0));
+      o.rb->forceActivationState(DISABLE_DEACTIVATION);
+      o.attached_kinematic = true;
+    } else if (loose) {
+      restore_dynamic(w, o);
+    }
+    return 0;
+  });
+}
+
+int cn_detach(int wh, int oh, int ph) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &o = w.obj(oh, "attached object");
+    if (ph != -1) w.obj(ph, "parent object");
+    size_t before = w.attachments.size();
+    w.attachments.erase(std::remove_if(w.attachments.begin(), w.attachments.end(),
+                                       [&](const Attachment &a) {
+                                         return a.obj == oh && (ph == -1 || a.parent == ph);
+                                       }),
+                        w.attachments.end());
+    restore_dynamic(w, o);
+    return (int)(before - w.attachments.size());
+  });
+}
+
+int cn_attachments(int wh, int *out4, int cap) {
+  return guard([&] {
+    World &w = world(wh);
+    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+    if (cap > 0) check_ptr(out4, "attachment output");
+    int n = 0;
+    for (auto &a : w.attachments) {
+      if (n < cap) {
+        out4[4 * n] = a.obj;
+        out4[4 * n + 1] = a.parent;
+        out4[4 * n + 2] = a.link;
+        out4[4 * n + 3] = a.loose ? 1 : 0;
+      }
+      ++n;
+    }
+    return n;
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,209 @@
+/* cram_native.h -- the C interface of libcram_native.
+ *
+ * A physics belief state for mobile manipulation: Bullet worlds (double precision), URDF
+ * articulated objects, contact / distance / ray queries, attachments, headless rendering with
+ * visibility queries, and KDL inverse kinematics.
+ *
+ * Conventions
+ *   - Every function returns an int: a status (0 = ok, negative = CN_E_* error code) or a
+ *     handle / count >= 0.  On a negative result, cn_last_error() gives a text naming the bad
+ *     value.  The error text is per thread.  No C++ exception escapes.
+ *   - Lengths in metres, angles in radians (fov in degrees), poses as 7 doubles
+ *     x y z qx qy qz qw (quaternions are normalised on the way in).
+ *   - Handles are ints.  World and IK-chain handles are global; object handles (bodies and
+ *     articulated objects share one numbering) belong to one world.  A copy of a world keeps
+ *     every object handle.  Removed or destroyed handles are never valid again.  Link and
+ *     joint indices are per articulated object, 0 .. count-1.
+ *   - "link" arguments of the object-level queries are -1 for a plain body or for "the whole
+ *     articulated object".
+ *   - Out arrays are caller-owned.  Functions filling a variable number of records take a
+ *     capacity (in records) and return the total number available; at most `cap` are written.
+ *   - One world must not be used by two threads at the same time; different worlds may be.
+ */
+#ifndef CRAM_NATIVE_H
+#define CRAM_NATIVE_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- status codes -------------------------------------------------------------------- */
+#define CN_OK          0
+#define CN_E_HANDLE   -1   /* stale, foreign or out-of-range handle or index          */
+#define CN_E_ARG      -2   /* NaN / inf / negative size / null pointer / bad option    */
+#define CN_E_NAME     -3   /* unknown link, joint, package or robot name               */
+#define CN_E_FILE     -4   /* missing, unreadable or corrupt file                      */
+#define CN_E_PARSE    -5   /* malformed URDF                                           */
+#define CN_E_STATE    -6   /* operation not possible in this state (e.g. attach cycle)  */
+#define CN_E_RENDER   -7   /* OSMesa / PNG failure                                     */
+#define CN_E_INTERNAL -8   /* unexpected library failure (out of memory, ...)           */
+
+/* object kinds */
+#define CN_BODY        0
+#define CN_ARTICULATED 1
+/* joint types */
+#define CN_JOINT_FIXED      0
+#define CN_JOINT_REVOLUTE   1
+#define CN_JOINT_CONTINUOUS 2
+#define CN_JOINT_PRISMATIC  3
+#define CN_JOINT_FLOATING   4   /* kept at its origin (treated as fixed) */
+#define CN_JOINT_PLANAR     5   /* kept at its origin (treated as fixed) */
+/* camera conventions: optical = z forward, x right, y down (ROS *_optical_frame);
+ * forward = x forward, y left, z up (ROS body / link frames) */
+#define CN_CAMERA_OPTICAL 0
+#define CN_CAMERA_FORWARD 1
+
+/* ---- errors and search paths ----------------------------------------------------------- */
+const char *cn_last_error(void);          /* text of this thread's last error ("" if none) */
+int cn_last_error_code(void);
+int cn_version(void);                     /* 10000*major + 100*minor + patch                */
+int cn_add_package_path(const char *package_name, const char *dir);  /* package://NAME/... */
+int cn_add_search_dir(const char *dir);   /* dir containing package directories           */
+int cn_clear_search_paths(void);
+/* Resolve package://, file:// or plain paths (relative ones against `base_dir`, may be NULL)
+ * to an existing file; writes a NUL-terminated path into out[cap]; returns its length. */
+int cn_resolve_path(const char *uri, const char *base_dir, char *out, int cap);
+
+/* ---- worlds ------------------------------------------------------------------------------ */
+int cn_world_create(double gx, double gy, double gz);      /* -> world handle             */
+int cn_world_destroy(int world);
+int cn_world_copy(int world);       /* -> new world: same objects, handles, poses, velocities,
+                                       joint states, attachments, filters; shapes shared   */
+int cn_world_alive(int world);      /* 1 live, 0 not (never an error)                      */
+int cn_world_count(void);           /* number of live worlds                               */
+int cn_world_set_gravity(int world, double gx, double gy, double gz);
+int cn_world_get_gravity(int world, double *out3);
+int cn_world_step(int world, double dt);                   /* one stepSimulation(dt)       */
+int cn_world_simulate(int world, double seconds, double dt); /* ceil(seconds/dt) steps -> n */
+int cn_world_num_objects(int world);                        /* live objects                */
+int cn_world_num_bodies(int world);  /* rigid bodies in Bullet (plain bodies + link bodies) */
+int cn_world_objects(int world, int *out, int cap);          /* live object handles -> count */
+
+/* ---- objects (bodies and articulated objects) --------------------------------------------- */
+int cn_object_kind(int world, int obj);                      /* CN_BODY / CN_ARTICULATED   */
+int cn_object_remove(int world, int obj);                    /* also drops its attachments */
+int cn_object_get_pose(int world, int obj, double *out7);    /* body pose / base pose      */
+int cn_object_set_pose(int world, int obj, const double *pose7); /* teleport, reactivates;
+                                                 rigidly attached objects follow         */
+int cn_object_get_poses(int world, const int *objs, int n, double *out7n);
+int cn_object_set_poses(int world, const int *objs, int n, const double *poses7n);
+int cn_object_set_color(int world, int obj, int link, double r, double g, double b, double a);
+int cn_object_get_color(int world, int obj, int link, double *out4);
+int cn_object_set_collision_filter(int world, int obj, int group, int mask);
+int cn_object_get_collision_filter(int world, int obj, int *out2);
+int cn_object_aabb(int world, int obj, int link, double *out6);  /* min xyz, max xyz    */
+int cn_object_is_active(int world, int obj);                 /* 1 if any body is awake     */
+
+/* ---- rigid bodies (mass 0 = static) -------------------------------------------------------- */
+int cn_body_add_plane(int world, double nx, double ny, double nz, double constant);
+int cn_body_add_box(int world, const double *pose7, double sx, double sy, double sz,
+                    double mass);                  /* FULL extents sx, sy, sz              */
+int cn_body_add_sphere(int world, const double *pose7, double radius, double mass);
+int cn_body_add_cylinder(int world, const double *pose7, double radius, double height,
+                         double mass);             /* axis = local z                      */
+int cn_body_add_cone(int world, const double *pose7, double radius, double height,
+                     double mass);                 /* axis = local z, apex at +height/2    */
+/* STL / OBJ / DAE through assimp.  Movable bodies: one convex hull per sub-mesh in a compound;
+ * static bodies: the exact triangle mesh.  Loaded shapes are cached by path + scale. */
+int cn_body_add_mesh(int world, const double *pose7, const char *path,
+                     double sx, double sy, double sz, double mass);
+int cn_body_add_convex_hull(int world, const double *pose7, const double *points3n, int n,
+                            double mass);
+int cn_body_get_velocity(int world, int body, double *out6);        /* linear, angular     */
+int cn_body_set_velocity(int world, int body, const double *vel6);
+int cn_body_get_mass(int world, int body, double *out1);
+/* shape description: kind (0 plane, 1 box, 2 sphere, 3 cylinder, 4 cone, 5 mesh, 6 hull),
+ * dims: box sx sy sz / sphere r / cylinder & cone r h / plane nx ny nz c / mesh sx sy sz */
+int cn_body_shape(int world, int body, double *out_dims4);          /* -> kind             */
+
+/* ---- articulated objects from URDF ---------------------------------------------------------- */
+/* One kinematic rigid body per link with collision geometry.  flags: CN_URDF_EXACT_MESHES =
+ * collision meshes as exact triangle meshes (for static environments), else one convex hull
+ * per sub-mesh.  Every joint starts at 0. */
+#define CN_URDF_EXACT_MESHES 1
+int cn_robot_add_urdf(int world, const char *urdf_xml, const double *base_pose7, int flags);
+int cn_robot_name(int world, int robot, const char **out_name);
+int cn_robot_num_links(int world, int robot);
+int cn_robot_num_joints(int world, int robot);     /* all joints, fixed ones included     */
+int cn_robot_root_link(int world, int robot);
+int cn_robot_link_name(int world, int robot, int link, const char **out_name);
+int cn_robot_joint_name(int world, int robot, int joint, const char **out_name);
+int cn_robot_link_index(int world, int robot, const char *name);
+int cn_robot_joint_index(int world, int robot, const char *name);
+/* ints: type, parent link, child link, mimicked joint (-1);
+ * doubles: lower, upper, max velocity, max effort, axis x y z, mimic multiplier, offset */
+int cn_robot_joint_info(int world, int robot, int joint, int *out4, double *out9);
+int cn_robot_link_parent_joint(int world, int robot, int link);     /* -> joint or -1     */
+int cn_robot_link_has_body(int world, int robot, int link);         /* 1 if it collides   */
+/* Set n joints at once (fixed / floating / planar joints ignore the value; mimic joints
+ * always follow their leader), then forward kinematics and attached objects, once. */
+int cn_robot_set_joints(int world, int robot, const int *joints, const double *values, int n);
+int cn_robot_get_joints(int world, int robot, double *out, int cap);     /* -> num joints */
+int cn_robot_link_poses(int world, int robot, double *out7, int cap);    /* -> num links  */
+int cn_robot_link_pose(int world, int robot, int link, double *out7);
+int cn_robot_set_self_collision(int world, int robot, int enabled);      /* default off   */
+
+/* ---- collision queries ------------------------------------------------------------------- */
+/* Pairs in contact: closest distance <= threshold (0 = touching or penetrating).  Records:
+ * ints (objA, linkA, objB, linkB), doubles (min distance). -> number of pairs */
+int cn_world_contacts(int world, double threshold, int *out4, double *out_dist, int cap);
+int cn_object_contacts(int world, int obj, double threshold, int *out4, double *out_dist,
+                       int cap);                     /* obj (all its links) against others */
+/* Closest distance between two objects (link -1 = whole object), searched up to max_dist.
+ * out7: distance, point on A xyz, point on B xyz.  Returns 1 if a pair closer than max_dist
+ * was found, 0 if not (distance then = max_dist). */
+int cn_closest_distance(int world, int objA, int linkA, int objB, int linkB, double max_dist,
+                        double *out7);
+/* Exclude a pair from contacts and physics (link -1 = whole object); ignore = 1 adds, 0 drops */
+int cn_ignore_pair(int world, int objA, int linkA, int objB, int linkB, int ignore);
+/* n rays from[3n] -> to[3n].  out_hit2n: obj, link (-1 -1 = no hit);
+ * out7n: fraction, point xyz, normal xyz.  -> number of hits */
+int cn_ray_test(int world, const double *from3n, const double *to3n, int n,
+                int *out_hit2n, double *out7n);
+
+/* ---- attachments ------------------------------------------------------------------------ */
+/* Attach body `obj` to `parent` (an articulated object with link >= 0, or a body with -1).
+ * rigid (loose = 0): obj keeps its transform relative to the link and is made kinematic;
+ * loose = 1: only recorded. */
+int cn_attach(int world, int obj, int parent, int link, int loose);
+int cn_detach(int world, int obj, int parent);          /* parent -1: all of obj's        */
+/* records: obj, parent, link, loose -> count */
+int cn_attachments(int world, int *out4, int cap);
+
+/* ---- rendering (OSMesa, headless) ---------------------------------------------------------- */
+/* Any of rgb (3*w*h bytes), depth (w*h metres along the view axis, 0 = nothing) and
+ * seg (2*w*h ints: obj, link; -1 -1 = background) may be NULL.  Rows top to bottom. */
+int cn_render(int world, const double *camera7, int convention, double fov_y_deg,
+              int width, int height, double near_m, double far_m,
+              unsigned char *rgb, double *depth, int *seg);
+int cn_render_png(int world, const double *camera7, int convention, double fov_y_deg,
+                  int width, int height, const char *png_path);
+int cn_write_png(const char *path, const unsigned char *rgb, int width, int height);
+/* camera pose at eye looking at target, `up` roughly up */
+int cn_look_at(const double *eye3, const double *target3, const double *up3, int convention,
+               double *out7);
+/* Visible fraction of (obj, link) (link -1 = all its links) from the camera: its pixels in
+ * the scene / its pixels rendered alone with the camera turned towards it.  Occluding
+ * object handles -> out_occluders[cap]; returns their number. */
+int cn_visibility(int world, const double *camera7, int convention, double fov_y_deg,
+                  int width, int height, int obj, int link, double *out_fraction,
+                  int *out_occluders, int cap);
+
+/* ---- inverse kinematics (KDL) -------------------------------------------------------------- */
+int cn_chain_create(int world, int robot, const char *base_link, const char *tip_link);
+int cn_chain_destroy(int chain);
+int cn_chain_num_joints(int chain);
+int cn_chain_joints(int chain, int *out_robot_joints);        /* robot joint indices      */
+int cn_chain_limits(int chain, double *out_lower, double *out_upper);
+int cn_chain_fk(int chain, const double *q, double *out7);     /* tip in base_link frame   */
+/* IK for the tip pose (in base_link frame) from seed q; random restarts within the limits
+ * drawn from `rng_seed`.  -> 0 solved (within pos_tol m and rot_tol rad), 1 not solved
+ * (out_q = best found).  out_err2 (may be NULL): position and rotation error. */
+int cn_chain_ik(int chain, const double *target7, const double *seed_q, int max_restarts,
+                double pos_tol, double rot_tol, unsigned int rng_seed, double *out_q,
+                double *out_err2);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,269 @@
+;;;; Native built-in predicates: comparisons, lists, calls into Lisp, Lisp data.
+
+(in-package :cram-prolog)
+
+(declaim (optimize (speed 3) (safety 1) (debug 0)))
+
+(defun register-native (name function)
+  (with-database-lock ()
+    (let ((pred (ensure-pred name)))
+      (setf (pred-native pred) function)
+      (setf (gethash (symbol-name name) *builtin-names*) pred)
+      (invalidate-pred pred)
+      name)))
+
+(defmacro def-native-predicate (name (m cont &rest lambda-list) &body body)
+  "Define the predicate NAME natively. LAMBDA-LIST (required, &optional, &rest parameters) is
+bound to the goal's run-time argument terms, undereferenced; a goal of another length fails. M
+is the machine, CONT the success continuation. BODY must end by returning
+(SOLVE-CONTINUE CONT) after a success (in tail position) or NIL for failure; it may bind
+variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM."
+  (let* ((args (gensym "ARGS")) (block (gensym "NATIVE"))
+         (optional-at (position '&optional lambda-list))
+         (rest-at (position '&rest lambda-list))
+         (required (subseq lambda-list 0 (or optional-at rest-at (length lambda-list))))
+         (optional (and optional-at (subseq lambda-list (1+ optional-at) rest-at)))
+         (rest (and rest-at (nth (1+ rest-at) lambda-list))))
+    `(register-native
+      ',name
+      (lambda (,m ,args ,cont)
+        (declare (ignorable ,m ,cont) (type function ,cont))
+        (block ,block
+          (let* (,@(loop for r in required
+                         collect `(,r (let ((s (deref ,args)))
+                                        (unless (consp s) (return-from ,block nil))
+                                        (setf ,args (cdr s))
+                                        (car s))))
+                 ,@(loop for o in optional
+                         for (var default) = (if (consp o) o (list o nil))
+                         collect `(,var (let ((s (deref ,args)))
+                                          (if (consp s)
+                                              (progn (setf ,args (cdr s)) (car s))
+                                              ,default))))
+                 ,@(when rest `((,rest ,args))))
+            ,@(unless rest `((unless (null (deref ,args)) (return-from ,block nil))))
+            ,@body))))))
+
+(defmacro solve-continue (cont)
+  "Inside DEF-NATIVE-PREDICATE: succeed, continuing with the rest of the proof."
+  `(funcall (the function ,cont)))
+
+(defun lisp-argument (term)
+  "TERM resolved for a call into Lisp: unbound variables appear as their ?symbols."
+  (resolve-term term (lambda (v) (or (pvar-name v) (make-symbol "?_")))))
+
+(defun call-lisp (function args)
+  "Apply FUNCTION to ARGS. Returns (values result t), or, when it signals an error and
+*BREAK-ON-LISP-ERRORS* is NIL, warns and returns (values nil nil)."
+  (if *break-on-lisp-errors*
+      (values (apply function args) t)
+      (handler-case (values (apply function args) t)
+        (error (e)
+          (warn "Lisp error in a Prolog goal calling ~s on ~s: ~a; the goal fails."
+                function args e)
+          (values nil nil)))))
+
+(defun function-designator (term goal)
+  (let ((f (lisp-argument term)))
+    (cond ((functionp f) f)
+          ((and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))) f)
+          ((and (consp f) (eq (car f) 'function) (symbolp (second f))) (second f))
+          ((and (consp f) (eq (car f) 'lambda)) (coerce f 'function))
+          (t (prolog-error "~s needs a function (a function object or the name of a defined ~
+function), got ~s." goal f)))))
+
+;;; Comparison and type tests
+
+(def-native-predicate bound (m cont x)
+  (unless (pvar-p (deref x)) (solve-continue cont)))
+
+(def-native-predicate ground (m cont x)
+  (when (term-ground-p x) (solve-continue cont)))
+
+(def-native-predicate == (m cont a b)
+  (when (unify-terms m a b) (solve-continue cont)))
+
+(def-native-predicate equal (m cont a b)
+  (when (equal (resolve-term a) (resolve-term b)) (solve-continue cont)))
+
+(macrolet ((compare (name op)
+             `(def-native-predicate ,name (m cont a b)
+                (multiple-value-bind (result ok)
+                    (call-lisp #',op (list (lisp-argument a) (lisp-argument b)))
+                  (when (and ok result) (solve-continue cont))))))
+  (compare < <) (compare > >) (compare <= <=) (compare >= >=))
+
+;;; Lists
+
+(defun member-retry (m index)
+  (let* ((x (cp-data m index 0))
+         (cell (cp-data m index 1))
+         (cont (cp-data m index 2))
+         (next (if (cut:lazy-tail-p (cdr cell)) (lazy-cdr cell) (deref (cdr cell)))))
+    (cond ((consp next)
+           (setf (cp-data m index 1) next)
+           (and (unify-terms m x (car next)) (funcall (the function cont))))
+          (t (setf (machine-cp-top m) index) nil))))
+
+(def-native-predicate member (m cont x list)
+  ;; works on lists and on lazy lists, computing their elements only as far as needed
+  (let ((l (deref list)))
+    (when (consp l)
+      (push-cp m #'member-retry x l cont)
+      (and (unify-terms m x (car l)) (solve-continue cont)))))
+
+(defun list-value (term goal)
+  "The proper (forced if lazy) Lisp list TERM denotes; an error naming GOAL otherwise."
+  (let ((l (resolve-term term)))
+    (unless (alexandria:proper-list-p (if (consp l) (force-ll l) l))
+      (prolog-error "~s needs a proper list, got ~s." goal l))
+    l))
+
+(def-native-predicate length (m cont list n)
+  (let ((l (deref list)))
+    (if (pvar-p l)
+        (let ((k (deref n)))
+          (unless (typep k '(integer 0))
+            (prolog-error "LENGTH needs a bound list or a non-negative integer length, got ~s and ~s."
+                          (lisp-argument list) (lisp-argument n)))
+          (when (unify-terms m l (loop repeat k collect (make-pvar)))
+            (solve-continue cont)))
+        (when (unify-terms m n (length (the list (list-value l 'length))))
+          (solve-continue cont)))))
+
+(def-native-predicate take (m cont n list out)
+  (let ((k (deref n)))
+    (unless (typep k '(integer 0))
+      (prolog-error "TAKE needs a non-negative integer count, got ~s." (lisp-argument n)))
+    (let ((items (loop with l = (deref list)
+                       repeat k
+                       while (consp l)
+                       collect (car l)
+                       do (setf l (if (cut:lazy-tail-p (cdr l)) (lazy-cdr l) (deref (cdr l)))))))
+      (when (unify-terms m out items) (solve-continue cont)))))
+
+(defun term< (a b)
+  "A total order on resolved terms: numbers < strings < symbols < conses < others."
+  (flet ((rank (x) (typecase x (real 0) (string 1) (symbol 2) (cons 3) (t 4))))
+    (let ((ra (rank a)) (rb (rank b)))
+      (cond ((/= ra rb) (< ra rb))
+            ((realp a) (< a b))
+            ((stringp a) (and (string< a b) t))
+            ((symbolp a) (let ((pa (symbol-package a)) (pb (symbol-package b)))
+                           (if (and (eq pa pb) (string/= (symbol-name a) (symbol-name b)))
+                               (and (string< (symbol-name a) (symbol-name b)) t)
+                               (and (string< (format nil "~s" a) (format nil "~s" b)) t))))
+            ((consp a) (cond ((term< (car a) (car b)) t)
+                             ((term< (car b) (car a)) nil)
+                             (t (term< (cdr a) (cdr b)))))
+            (t nil)))))
+
+(def-native-predicate sort (m cont list &optional predicate result)
+  ;; (sort ?list ?sorted): standard order; (sort ?list ?predicate ?sorted): a Lisp predicate
+  (let* ((items (copy-list (list-value list 'sort)))
+         (out (if result result predicate))
+         (test (if result (function-designator predicate 'sort) #'term<)))
+    (when out
+      (multiple-value-bind (sorted ok) (call-lisp #'stable-sort (list items test))
+        (when (and ok (unify-terms m out sorted)) (solve-continue cont))))))
+
+(def-native-predicate subset (m cont sub set)
+  (let ((s (list-value set 'subset)))
+    (when (every (lambda (x) (member x s :test #'equal)) (list-value sub 'subset))
+      (solve-continue cont))))
+
+(def-native-predicate reduce (m cont function list result)
+  (multiple-value-bind (value ok)
+      (call-lisp #'reduce (list (function-designator function 'reduce) (list-value list 'reduce)))
+    (when (and ok (unify-terms m result value)) (solve-continue cont))))
+
+(def-native-predicate max (m cont a b &optional c)
+  ;; (max ?list ?max) or (max ?a ?b ?max)
+  (multiple-value-bind (value ok)
+      (if c
+          (call-lisp #'max (list (lisp-argument a) (lisp-argument b)))
+          (call-lisp #'reduce (list #'max (list-value a 'max))))
+    (when (and ok (unify-terms m (or c b) value)) (solve-continue cont))))
+
+(def-native-predicate string-concat (m cont a b &optional c)
+  ;; (string-concat ?strings ?result) or (string-concat ?a ?b ?result)
+  (multiple-value-bind (value ok)
+      (call-lisp (lambda (&rest parts) (apply #'concatenate 'string (mapcar #'string parts)))
+                 (if c (list (lisp-argument a) (lisp-argument b)) (list-value a 'string-concat)))
+    (when (and ok (unify-terms m (or c b) value)) (solve-continue cont))))
+
+;;; Calling Lisp
+
+(def-native-predicate lisp-fun (m cont function &rest args)
+  (let ((spine (resolve-term args)))
+    (unless (and (consp spine) (alexandria:proper-list-p spine))
+      (prolog-error "LISP-FUN needs a function, its arguments and a result variable: ~s."
+                    (list* 'lisp-fun (lisp-argument function) (lisp-argument args))))
+    (multiple-value-bind (value ok)
+        (call-lisp (function-designator function 'lisp-fun) (mapcar #'lisp-argument (butlast spine)))
+      (when (and ok (unify-terms m (car (last spine)) value))
+        (solve-continue cont)))))
+
+(def-native-predicate lisp-pred (m cont function &rest args)
+  (multiple-value-bind (value ok)
+      (call-lisp (function-designator function 'lisp-pred) (lisp-argument args))
+    (when (and ok value) (solve-continue cont))))
+
+(def-native-predicate symbol-value (m cont symbol value)
+  (let ((s (deref symbol)))
+    (unless (symbolp s)
+      (prolog-error "SYMBOL-VALUE needs a symbol, got ~s." (lisp-argument symbol)))
+    (unless (boundp s)
+      (prolog-error "SYMBOL-VALUE: the symbol ~s has no value." s))
+    (when (unify-terms m value (symbol-value s)) (solve-continue cont))))
+
+(def-native-predicate set-symbol-value (m cont symbol value)
+  (let ((s (deref symbol)))
+    (unless (and s (symbolp s) (not (constantp s)))
+      (prolog-error "SET-SYMBOL-VALUE needs a variable's symbol, got ~s." (lisp-argument symbol)))
+    (setf (symbol-value s) (lisp-argument value))
+    (solve-continue cont)))
+
+(def-native-predicate slot-value (m cont object slot value)
+  ;; writes the slot when VALUE is bound, reads it otherwise
+  (let ((o (lisp-argument object)) (s (deref slot)) (v (deref value)))
+    (if (pvar-p v)
+        (multiple-value-bind (read ok) (call-lisp #'slot-value (list o s))
+          (when (and ok (unify-terms m v read)) (solve-continue cont)))
+        (multiple-value-bind (written ok)
+            (call-lisp (lambda (o s v) (setf (slot-value o s) v)) (list o s (lisp-argument v)))
+          (declare (ignore written))
+          (when ok (solve-continue cont))))))
+
+(def-native-predicate get-slot-value (m cont object slot value)
+  (multiple-value-bind (read ok) (call-lisp #'slot-value (list (lisp-argument object) (deref slot)))
+    (when (and ok (unify-terms m value read)) (solve-continue cont))))
+
+(def-native-predicate instance-of (m cont type object)
+  ;; bound OBJECT: TYPE unifies with its class name; unbound: OBJECT becomes a new instance
+  (let ((o (deref object)))
+    (if (pvar-p o)
+        (multiple-value-bind (made ok) (call-lisp #'make-instance (list (lisp-argument type)))
+          (when (and ok (unify-terms m o made)) (solve-continue cont)))
+        (let ((tp (deref type)))
+          (if (pvar-p tp)
+              (when (unify-terms m tp (class-name (class-of o))) (solve-continue cont))
+              (when (typep o tp) (solve-continue cont)))))))
+
+(def-native-predicate lisp-type (m cont object type)
+  (when (unify-terms m type (type-of (lisp-argument object))) (solve-continue cont)))
+
+;;; Output
+
+(def-native-predicate format (m cont control &rest args)
+  (multiple-value-bind (result ok)
+      (call-lisp #'format (list* t (lisp-argument control) (lisp-argument args)))
+    (declare (ignore result))
+    (when ok (solve-continue cont))))
+
+(def-native-predicate warn (m cont control &rest args)
+  (apply #'warn (lisp-argument control) (lisp-argument args))
+  (solve-continue cont))
+
+(def-native-predicate error (m cont control &rest args)
+  (apply #'error (lisp-argument control) (lisp-argument args)))

@@ -1,0 +1,249 @@
+;;;; Compilation of clauses into trees of closures.
+;;;;
+;;;; A clause becomes a head matcher (M FRAME ARGS) → boolean and a body function
+;;;; (M FRAME CONT BARRIER). FRAME is a simple-vector holding the clause instance's variables: a
+;;;; variable's first occurrence in the head just stores the caller's term, later occurrences
+;;;; unify; variables first seen in the body get fresh PVARs. CONT is the success continuation (a
+;;;; function of no arguments); a goal that fails returns NIL. Every call of a continuation or a
+;;;; predicate is a tail call, so a deterministic recursion runs in constant Lisp stack. BARRIER
+;;;; is the choice-point height a cut in the body returns to.
+
+(in-package :cram-prolog)
+
+(declaim (optimize (speed 3) (safety 1) (debug 0)))
+
+(defvar *env* nil "Variable symbol → frame index, while compiling one clause or goal.")
+(defvar *nvars* 0 "Number of frame slots allocated while compiling.")
+(defvar *seen* '() "Variables that already have a value in the frame at this point.")
+
+(defstruct (clause (:copier nil))
+  "A compiled clause."
+  (kind 0 :type fixnum)   ; first argument: 0 variable/none, 1 atom, 2 cons
+  (key nil)               ; the atom when KIND is 1
+  (nvars 0 :type fixnum)
+  (match nil :type function)
+  (init '() :type list)   ; ((index . name) ...) of body-only variables
+  (body nil)              ; NIL for a fact
+  (source nil))
+
+(declaim (inline anonymous-var-p))
+(defun anonymous-var-p (x)
+  (and (symbolp x) x (string= (symbol-name x) "?_")))
+
+(defun source-var-p (x)
+  (is-var x))
+
+(defun has-source-vars-p (x)
+  (cond ((source-var-p x) t)
+        ((consp x) (or (has-source-vars-p (car x)) (has-source-vars-p (cdr x))))
+        (t nil)))
+
+(defun var-index (sym)
+  (or (gethash sym *env*)
+      (prog1 (setf (gethash sym *env*) *nvars*)
+        (incf *nvars*))))
+
+(defun atom-matcher (p)
+  (if (or (symbolp p) (typep p 'fixnum) (characterp p))
+      (lambda (m frame term)
+        (declare (ignore frame))
+        (let ((x (deref term)))
+          (cond ((eq x p) t)
+                ((pvar-p x) (bind-var m x p))
+                (t nil))))
+      (lambda (m frame term)
+        (declare (ignore frame))
+        (let ((x (deref term)))
+          (if (pvar-p x) (bind-var m x p) (equal x p))))))
+
+(defun compile-build (p)
+  "A function of the frame building the run-time term for source pattern P."
+  (cond ((anonymous-var-p p) (lambda (frame) (declare (ignore frame)) (make-pvar)))
+        ((source-var-p p)
+         (let ((i (var-index p)))
+           (declare (type fixnum i))
+           (if (member p *seen* :test #'eq)
+               (lambda (frame) (svref frame i))
+               (progn (push p *seen*)
+                      (lambda (frame) (setf (svref frame i) (make-pvar p)))))))
+        ((not (has-source-vars-p p)) (lambda (frame) (declare (ignore frame)) p))
+        (t (let ((bcar (compile-build (car p)))
+                 (bcdr (compile-build (cdr p))))
+             (declare (type function bcar bcdr))
+             (lambda (frame)
+               (let ((a (funcall bcar frame)))
+                 (cons a (funcall bcdr frame))))))))
+
+(defun compile-match (p)
+  "A function (M FRAME TERM) unifying the run-time TERM with source pattern P."
+  (cond ((anonymous-var-p p) (lambda (m frame term) (declare (ignore m frame term)) t))
+        ((source-var-p p)
+         (let ((i (var-index p)))
+           (declare (type fixnum i))
+           (if (member p *seen* :test #'eq)
+               (lambda (m frame term) (unify-terms m (svref frame i) term))
+               (progn (push p *seen*)
+                      (lambda (m frame term)
+                        (declare (ignore m))
+                        (setf (svref frame i) term)
+                        t)))))
+        ((atom p) (atom-matcher p))
+        ((not (has-source-vars-p p)) (lambda (m frame term)
+                                       (declare (ignore frame))
+                                       (unify-terms m p term)))
+        (t (let* ((seen *seen*)
+                  (builder (compile-build p)))
+             (declare (type function builder))
+             (setf *seen* seen)
+             (let ((mcar (compile-match (car p)))
+                   (mcdr (compile-match (cdr p))))
+               (declare (type function mcar mcdr))
+               (lambda (m frame term)
+                 (let ((x (deref term)))
+                   (cond ((consp x)
+                          (and (funcall mcar m frame (car x))
+                               (funcall mcdr m frame (cdr x))))
+                         ((pvar-p x) (bind-var m x (funcall builder frame)))
+                         (t nil)))))))))
+
+(defun check-clause (clause)
+  (unless (and (consp clause) (consp (car clause)) (car (car clause))
+               (symbolp (car (car clause))) (not (source-var-p (car (car clause)))))
+    (prolog-error "A clause must be (head goal...) with a head (functor arg...) whose functor ~
+is a symbol, got ~s." clause)))
+
+(defun compile-clause (clause)
+  "Compile CLAUSE, a list (head . body) of source terms, into a CLAUSE structure."
+  (check-clause clause)
+  (let ((*env* (make-hash-table :test 'eq))
+        (*nvars* 0)
+        (*seen* '()))
+    (destructuring-bind (head . body) clause
+      (let* ((match (compile-match (cdr head)))
+             (init (loop for v in (vars-in body)
+                         unless (member v *seen* :test #'eq)
+                           collect (prog1 (cons (var-index v) v) (push v *seen*))))
+             (body-fn (and body (compile-body body)))
+             (first (if (consp (cdr head)) (cadr head) '?_)))
+        (make-clause :kind (cond ((source-var-p first) 0) ((consp first) 2) (t 1))
+                     :key (if (or (source-var-p first) (consp first)) nil first)
+                     :nvars *nvars* :match match :init init :body body-fn
+                     :source clause)))))
+
+(defun compile-body (goals)
+  "A goal function running the conjunction GOALS."
+  (cond ((null goals) (lambda (m frame cont barrier)
+                        (declare (ignore m frame barrier) (type function cont))
+                        (funcall cont)))
+        ((null (cdr goals)) (compile-goal (car goals)))
+        (t (let ((first (compile-goal (car goals)))
+                 (rest (compile-body (cdr goals))))
+             (declare (type function first rest))
+             (lambda (m frame cont barrier)
+               (funcall first m frame
+                        (lambda () (funcall rest m frame cont barrier))
+                        barrier))))))
+
+(defun compile-goal (goal)
+  "A function (M FRAME CONT BARRIER) proving the source GOAL."
+  (cond ((or (source-var-p goal) (pvar-p goal))
+         (compile-goal (list 'call goal)))
+        ((atom goal)
+         (prolog-error "A goal must be a list (functor arg...), got ~s." goal))
+        (t
+         (let ((pred (resolve-functor (car goal))))
+           (if (pred-control pred)
+               (funcall (the function (pred-control pred)) (cdr goal))
+               (let ((build (compile-build (cdr goal))))
+                 (declare (type function build))
+                 (lambda (m frame cont barrier)
+                   (declare (ignore barrier))
+                   (funcall (pred-entry pred) m (funcall build frame) cont))))))))
+
+;;; Running clauses
+
+(declaim (inline first-arg-of clause-compatible-p))
+(defun first-arg-of (args)
+  "The dereferenced first argument of the run-time argument list ARGS, or +UNBOUND+ when unknown."
+  (let ((args (deref args)))
+    (if (consp args)
+        (let ((a (deref (car args))))
+          (if (pvar-p a) +unbound+ a))
+        +unbound+)))
+
+(defun clause-compatible-p (clause a)
+  (declare (type clause clause))
+  (case (clause-kind clause)
+    (0 t)
+    (1 (or (eq a +unbound+)
+           (and (atom a)
+                (let ((k (clause-key clause)))
+                  (or (eq a k) (and (not (symbolp k)) (equal a k)))))))
+    (t (or (eq a +unbound+) (consp a)))))
+
+(defun next-compatible (clauses a)
+  (loop for tail on clauses
+        when (clause-compatible-p (car tail) a) return tail))
+
+(defvar +empty-frame+ (vector))
+
+(declaim (inline run-clause))
+(defun run-clause (m clause args cont barrier)
+  (declare (type clause clause))
+  (let* ((n (clause-nvars clause))
+         (frame (if (zerop n) +empty-frame+ (make-array n))))
+    (when (funcall (clause-match clause) m frame args)
+      (loop for (i . name) in (clause-init clause)
+            do (setf (svref frame i) (make-pvar name)))
+      (let ((body (clause-body clause)))
+        (if body
+            (funcall (the function body) m frame cont barrier)
+            (funcall (the function cont)))))))
+
+(defun retry-clauses (m index)
+  (let* ((rest (cp-data m index 0))
+         (args (cp-data m index 1))
+         (cont (cp-data m index 2))
+         (next (next-compatible (cdr rest) (first-arg-of args))))
+    (if next
+        (setf (cp-data m index 0) next)
+        (setf (machine-cp-top m) index))
+    (run-clause m (car rest) args cont index)))
+
+(defun try-clauses (m clauses args cont)
+  "Run the CLAUSES whose first argument can match ARGS, leaving a choice point for the rest."
+  (let* ((a (first-arg-of args))
+         (tail (next-compatible clauses a)))
+    (when tail
+      (let ((rest (next-compatible (cdr tail) a))
+            (barrier (machine-cp-top m)))
+        (when rest
+          (push-cp m #'retry-clauses rest args cont))
+        (run-clause m (car tail) args cont barrier)))))
+
+(defparameter *index-threshold* 8
+  "Predicates with at least this many clauses get a first-argument index.")
+
+(defun make-clauses-entry (clauses)
+  "The entry function running CLAUSES, indexed on the first argument when they are many."
+  (if (< (length clauses) *index-threshold*)
+      (lambda (m args cont) (try-clauses m clauses args cont))
+      (let ((table (make-hash-table :test 'equal))
+            (var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
+            (cons-clauses (remove 1 clauses :key #'clause-kind)))
+        ;; bucket per atom key: clauses with that key or a variable first argument, in order
+        (let ((vars-so-far '()))
+          (dolist (c clauses)
+            (case (clause-kind c)
+              (0 (push c vars-so-far)
+               (maphash (lambda (k bucket) (setf (gethash k table) (cons c bucket))) table))
+              (1 (let ((bucket (gethash (clause-key c) table :none)))
+                   (setf (gethash (clause-key c) table)
+                         (cons c (if (eq bucket :none) vars-so-far bucket))))))))
+        (maphash (lambda (k bucket) (setf (gethash k table) (reverse bucket))) table)
+        (lambda (m args cont)
+          (let ((a (first-arg-of args)))
+            (try-clauses m (cond ((eq a +unbound+) clauses)
+                                 ((consp a) cons-clauses)
+                                 (t (gethash a table var-clauses)))
+                         args cont))))))

@@ -1,0 +1,111 @@
+;;;; Predicates: one PRED per functor symbol, holding its clause sources, handler or native code
+;;;; and the compiled entry function (M ARGS CONT) that every call goes through.
+
+(in-package :cram-prolog)
+
+(declaim (optimize (speed 3) (safety 1) (debug 0)))
+
+(define-condition prolog-error (error)
+  ((message :initarg :message :reader prolog-error-message))
+  (:report (lambda (c s) (write-string (prolog-error-message c) s)))
+  (:documentation "An error in a Prolog program or query: a malformed goal or clause, a
+predicate called with an unbound goal, and similar."))
+
+(define-condition prolog-resource-error (prolog-error) ()
+  (:documentation "A query ran out of stack or heap (for example an endless recursion)."))
+
+(defun prolog-error (format &rest args)
+  (error 'prolog-error :message (apply #'format nil format args)))
+
+(defvar *break-on-lisp-errors* nil
+  "When NIL, a Lisp error inside LISP-FUN, LISP-PRED (and the other predicates calling Lisp
+functions) prints a warning and the goal fails. When true, the error is signalled.")
+
+(defvar *database-lock* (sb-thread:make-mutex :name "cram-prolog database")
+  "Protects the predicate table, the fact groups and the compilation of predicates.")
+
+(defmacro with-database-lock (() &body body)
+  `(sb-thread:with-recursive-lock (*database-lock*) ,@body))
+
+(defstruct (pred (:constructor %make-pred (functor)) (:copier nil))
+  "Everything known about the predicate named FUNCTOR."
+  (functor nil :type symbol)
+  (entry #'identity :type function)     ; (lambda (m args cont)) → true on a solution
+  (sources '())                         ; ((group-name . clauses) ...) in registration order
+  (dynamic '())                         ; facts added with ADD-FACT, in order
+  (handler nil)                         ; (lambda (bindings &rest args)) → lazy list of alists
+  (native nil)                          ; (lambda (m args cont)) for built-ins
+  (control nil)                         ; compiler of a control construct: (lambda (args)) → goal
+  (warned nil))
+
+(defvar *predicates* (make-hash-table :test 'eq :synchronized t)
+  "Functor symbol → PRED.")
+
+(defun make-lazy-entry (pred)
+  "An entry that installs PRED's real entry on first call, then calls it."
+  (lambda (m args cont)
+    (install-entry pred)
+    (funcall (pred-entry pred) m args cont)))
+
+(defun ensure-pred (functor)
+  "The PRED of FUNCTOR, created when new."
+  (or (gethash functor *predicates*)
+      (with-database-lock ()
+        (or (gethash functor *predicates*)
+            (let ((pred (%make-pred functor)))
+              (setf (pred-entry pred) (make-lazy-entry pred))
+              (setf (gethash functor *predicates*) pred))))))
+
+(defun pred-defined-p (pred)
+  (or (pred-native pred) (pred-control pred) (pred-handler pred)
+      (pred-sources pred) (pred-dynamic pred)))
+
+(defvar *builtin-names* (make-hash-table :test 'equal)
+  "Symbol name → built-in PRED, for goals written with a same-named symbol of another package.")
+
+(defun resolve-functor (functor)
+  "The PRED a goal with FUNCTOR calls: FUNCTOR's own when it has a definition, otherwise a
+built-in of the same name, otherwise FUNCTOR's (undefined) one."
+  (unless (and functor (symbolp functor))
+    (prolog-error "A goal's functor must be a non-nil symbol, got ~s." functor))
+  (let ((pred (ensure-pred functor)))
+    (if (pred-defined-p pred)
+        pred
+        (or (gethash (symbol-name functor) *builtin-names*) pred))))
+
+(defun invalidate-pred (pred)
+  "Make PRED recompile on its next call."
+  (setf (pred-entry pred) (make-lazy-entry pred)))
+
+(defun undefined-entry (pred)
+  (lambda (m args cont)
+    (declare (ignore m args cont))
+    (unless (pred-warned pred)
+      (setf (pred-warned pred) t)
+      (warn "Trying to prove a goal with the undefined functor ~s: it fails."
+            (pred-functor pred)))
+    nil))
+
+(defun install-entry (pred)
+  "Compute and store PRED's entry from its current definition."
+  (with-database-lock ()
+    (setf (pred-entry pred)
+          (cond ((pred-native pred) (pred-native pred))
+                ((pred-control pred) (control-entry pred))
+                (t
+                 (let* ((clauses (loop for (nil . forms) in (pred-sources pred)
+                                       append (mapcar #'compile-clause forms)))
+                        (clauses (append clauses
+                                         (mapcar #'compile-clause (pred-dynamic pred))))
+                        (clause-entry (if clauses
+                                          (make-clauses-entry clauses)
+                                          (undefined-entry pred))))
+                   (if (pred-handler pred)
+                       (make-handler-entry pred (pred-handler pred)
+                                           (and clauses clause-entry))
+                       clause-entry)))))))
+
+(defun control-entry (pred)
+  "Entry of a control construct called through CALL or a query: compile the goal and run it."
+  (lambda (m args cont)
+    (meta-call m (cons (pred-functor pred) args) cont)))

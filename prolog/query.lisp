@@ -1,0 +1,82 @@
+;;;; The query API: PROLOG returns the lazy list of solutions of a goal.
+
+(in-package :cram-prolog)
+
+(defun final-continuation ()
+  t)
+
+(defun convert-binding-value (value env frame)
+  "VALUE from an initial binding alist as a run-time term over FRAME's variables."
+  (cond ((anonymous-var-p value) (make-pvar))
+        ((is-var value) (svref frame (cdr (assoc value env :test #'eq))))
+        ((consp value)
+         (let ((a (convert-binding-value (car value) env frame))
+               (d (convert-binding-value (cdr value) env frame)))
+           (if (and (eq a (car value)) (eq d (cdr value))) value (cons a d))))
+        (t value)))
+
+(defun solution-alist (out frame env)
+  "The binding alist of the output variables OUT in FRAME: values fully substituted, unbound
+variables shown as ?symbols, variables without a value left out."
+  (let ((names '()) (counter 0))
+    (flet ((name-of (v)
+             (or (cdr (assoc v names :test #'eq))
+                 (let ((sym (or (car (find v env :key (lambda (e) (svref frame (cdr e)))
+                                             :test #'eq))
+                                (make-symbol (format nil "?_G~d" (incf counter))))))
+                   (push (cons v sym) names)
+                   sym))))
+      (loop for sym in out
+            for value = (resolve-term (svref frame (cdr (assoc sym env :test #'eq))) #'name-of)
+            unless (eq value sym)
+              collect (cons sym value)))))
+
+(defmacro with-storage-guard (() &body body)
+  `(handler-case (progn ,@body)
+     (storage-condition (c)
+       (error 'prolog-resource-error
+              :message (format nil "The Prolog query ran out of memory or stack (~a): ~
+probably an endless or too deep recursion." (type-of c))))))
+
+(defun prolog (goal &optional bindings)
+  "Prove GOAL (a term; ?symbols are variables) and return the lazy list of its solutions: binding
+alists ((?var . value) ...) for the variables of GOAL and of BINDINGS, with values fully
+substituted. NIL means no solution; (NIL) one solution binding nothing. BINDINGS, an alist of
+initial values, constrains the query. Solutions are computed one at a time as the list is read:
+only the first is computed before PROLOG returns."
+  (unless (listp bindings)
+    (prolog-error "PROLOG's bindings must be an alist ((?var . value) ...), got ~s." bindings))
+  (dolist (b bindings)
+    (unless (and (consp b) (is-var (car b)))
+      (prolog-error "PROLOG's bindings must be an alist ((?var . value) ...); ~s is not a binding."
+                    b)))
+  (let* ((binding-vars (remove-duplicates (mapcar #'car bindings) :from-end t))
+         (out (remove-if #'anonymous-var-p
+                         (remove-duplicates (append (vars-in goal) binding-vars) :from-end t))))
+    (multiple-value-bind (fn frame env)
+        (compile-goal-term goal (append binding-vars (vars-in (mapcar #'cdr bindings))))
+      (let ((m (make-machine))
+            (state :fresh))
+        ;; initial bindings; no choice point exists yet, so nothing needs trailing
+        (dolist (b bindings)
+          (unless (unify-terms m (svref frame (cdr (assoc (car b) env)))
+                               (convert-binding-value (cdr b) env frame))
+            (setf state :done)))
+        (make-lazy-list
+         (lambda ()
+           (if (eq state :done)
+               (values nil nil)
+               (let ((found nil))
+                 (unwind-protect
+                      (with-storage-guard ()
+                        (setf found
+                              (if (eq state :fresh)
+                                  (progn (setf state :running)
+                                         (or (funcall (the function fn) m frame
+                                                      #'final-continuation 0)
+                                             (backtrack m)))
+                                  (backtrack m))))
+                   (unless found (setf state :done)))
+                 (if found
+                     (values (solution-alist out frame env) t)
+                     (values nil nil))))))))))

@@ -1,0 +1,192 @@
+;;;; Run-time terms: logic variables bound destructively, the trail, choice points, unification.
+;;;;
+;;;; A run-time term is an s-expression whose variables are PVAR structures. A query's ?symbols
+;;;; become PVARs when the query starts; clause variables become PVARs (or are shared with the
+;;;; caller's terms) when a clause is entered. Bindings are undone on backtracking through the
+;;;; trail. The choice-point stack holds, per choice point, the trail height and a resume function
+;;;; with its data, so a solver can stop after a solution and be resumed later.
+
+(in-package :cram-prolog)
+
+(declaim (optimize (speed 3) (safety 1) (debug 0)))
+
+(defconstant +unbound+ '+unbound+
+  "The value slot of an unbound PVAR.")
+
+(defstruct (pvar (:constructor make-pvar (&optional name))
+                 (:copier nil))
+  "A logic variable. VALUE is +UNBOUND+ or the term it is bound to; NAME the source ?symbol."
+  (value +unbound+)
+  (name nil))
+
+(defmethod print-object ((v pvar) stream)
+  (if (eq (pvar-value v) +unbound+)
+      (format stream "#<~a>" (or (pvar-name v) "_"))
+      (format stream "#<~a=~s>" (or (pvar-name v) "_") (pvar-value v))))
+
+(declaim (inline deref))
+(defun deref (term)
+  "TERM with leading bound variables followed to their values."
+  (loop while (and (pvar-p term) (not (eq (pvar-value term) +unbound+)))
+        do (setf term (pvar-value term)))
+  term)
+
+(defconstant +cp-size+ 5
+  "Slots per choice point: trail height, resume function, three data slots.")
+
+(defstruct (machine (:constructor %make-machine))
+  "The state of one running query: trail and choice-point stack."
+  (trail (make-array 64) :type simple-vector)
+  (trail-top 0 :type fixnum)
+  (cps (make-array (* 32 +cp-size+)) :type simple-vector)
+  (cp-top 0 :type fixnum))
+
+(defun make-machine ()
+  "A fresh machine with empty trail and choice-point stack."
+  (%make-machine))
+
+(defun grow-vector (vector)
+  (declare (type simple-vector vector))
+  (let ((new (make-array (* 2 (length vector)))))
+    (replace new vector)
+    new))
+
+(declaim (inline bind-var))
+(defun bind-var (m var value)
+  "Bind the unbound VAR to VALUE, recording it on M's trail when a choice point could undo it."
+  (declare (type machine m) (type pvar var))
+  (setf (pvar-value var) value)
+  (unless (zerop (machine-cp-top m))
+    (let ((top (machine-trail-top m))
+          (trail (machine-trail m)))
+      (when (>= top (length trail))
+        (setf trail (grow-vector trail)
+              (machine-trail m) trail))
+      (setf (svref trail top) var
+            (machine-trail-top m) (1+ top))))
+  t)
+
+(defun undo-trail (m mark)
+  "Unbind every variable trailed after MARK."
+  (declare (type machine m) (type fixnum mark))
+  (let ((trail (machine-trail m)))
+    (loop for i of-type fixnum from (1- (machine-trail-top m)) downto mark
+          do (setf (pvar-value (svref trail i)) +unbound+
+                   (svref trail i) 0))
+    (setf (machine-trail-top m) mark)))
+
+(declaim (inline push-cp))
+(defun push-cp (m function a b c)
+  "Push a choice point resuming with (FUNCTION M INDEX) where slots A B C hold its data."
+  (declare (type machine m))
+  (let ((top (machine-cp-top m))
+        (cps (machine-cps m)))
+    (declare (type fixnum top))
+    (when (> (+ top +cp-size+) (length cps))
+      (setf cps (grow-vector cps)
+            (machine-cps m) cps))
+    (setf (svref cps top) (machine-trail-top m)
+          (svref cps (+ top 1)) function
+          (svref cps (+ top 2)) a
+          (svref cps (+ top 3)) b
+          (svref cps (+ top 4)) c
+          (machine-cp-top m) (+ top +cp-size+))
+    top))
+
+(declaim (inline cut-to))
+(defun cut-to (m height)
+  "Remove every choice point above HEIGHT."
+  (declare (type machine m) (type fixnum height))
+  (when (< height (machine-cp-top m))
+    (setf (machine-cp-top m) height)
+    (when (zerop height)
+      ;; nothing is left to undo: bindings are final
+      (let ((trail (machine-trail m)))
+        (fill trail 0 :end (machine-trail-top m))
+        (setf (machine-trail-top m) 0))))
+  nil)
+
+(defun backtrack (m)
+  "Resume the newest choice point until one reports a solution (T); NIL when none is left."
+  (declare (type machine m))
+  (loop
+    (let ((top (machine-cp-top m)))
+      (declare (type fixnum top))
+      (when (zerop top) (return nil))
+      (let* ((index (- top +cp-size+))
+             (cps (machine-cps m)))
+        (undo-trail m (svref cps index))
+        (when (funcall (the function (svref cps (+ index 1))) m index)
+          (return t))))))
+
+(declaim (inline cp-data))
+(defun cp-data (m index slot)
+  (svref (machine-cps m) (+ (the fixnum index) 2 (the fixnum slot))))
+
+(defun (setf cp-data) (value m index slot)
+  (setf (svref (machine-cps m) (+ (the fixnum index) 2 (the fixnum slot))) value))
+
+(defun unify-terms (m a b)
+  "Unify the run-time terms A and B on machine M; true on success. Atoms unify when EQUAL."
+  (declare (type machine m))
+  (loop
+    (setf a (deref a) b (deref b))
+    (cond ((eq a b) (return t))
+          ((pvar-p a) (return (bind-var m a b)))
+          ((pvar-p b) (return (bind-var m b a)))
+          ((consp a)
+           (unless (and (consp b) (unify-terms m (car a) (car b)))
+             (return nil))
+           (setf a (cdr a) b (cdr b)))
+          (t (return (equal a b))))))
+
+(defun resolve-term (term &optional map)
+  "TERM with every bound variable replaced by its value, recursively. Unbound variables stay,
+or are replaced through MAP (a function of the variable) when given. Shares unchanged parts."
+  (let ((term (deref term)))
+    (cond ((pvar-p term) (if map (funcall (the function map) term) term))
+          ((consp term) (resolve-list term map))
+          (t term))))
+
+(defun resolve-list (list map)
+  "RESOLVE-TERM of the cons LIST, walking its spine iteratively."
+  (let ((items '()) (x list) (changed nil) (tail nil))
+    (loop
+      (let ((a (resolve-term (car x) map)))
+        (push a items)
+        (unless (eq a (car x)) (setf changed t)))
+      (let* ((d (cdr x)) (dd (deref d)))
+        (unless (eq d dd) (setf changed t))
+        (if (consp dd)
+            (setf x dd)
+            (progn
+              (setf tail (if (pvar-p dd) (if map (funcall (the function map) dd) dd) dd))
+              (unless (eq tail d) (setf changed t))
+              (return)))))
+    (if changed
+        (let ((result tail))
+          (dolist (a items result) (setf result (cons a result))))
+        list)))
+
+(defun deref-term (term)
+  "TERM with its leading bound variables followed (not substituted inside)."
+  (deref term))
+
+(defun term-ground-p (term)
+  "True when TERM contains no unbound variable."
+  (let ((term (deref term)))
+    (loop
+      (cond ((pvar-p term) (return nil))
+            ((consp term)
+             (unless (term-ground-p (car term)) (return nil))
+             (setf term (deref (cdr term))))
+            (t (return t))))))
+
+(defun copy-term-fresh (term)
+  "TERM resolved, with its unbound variables replaced by fresh ones (consistently)."
+  (let ((map '()))
+    (resolve-term term (lambda (v)
+                         (or (cdr (assoc v map :test #'eq))
+                             (let ((new (make-pvar (pvar-name v))))
+                               (push (cons v new) map)
+                               new))))))

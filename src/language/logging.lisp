@@ -1,0 +1,105 @@
+;;;; Wall-clock time, the replaceable sleep, and CRAM-shaped log lines.
+
+(in-package :cram-language)
+
+(defun unix-time ()
+  "The current wall-clock time as seconds since the Unix epoch, a double-float
+with microsecond resolution."
+  (multiple-value-bind (seconds microseconds) (sb-ext:get-time-of-day)
+    (+ seconds (/ microseconds 1d6))))
+
+(defun check-real-seconds (seconds what)
+  "Signal an error unless SECONDS is a finite non-negative real; WHAT names the
+operation for the message."
+  (unless (and (realp seconds)
+               (not (and (floatp seconds)
+                         (or (sb-ext:float-nan-p seconds)
+                             (sb-ext:float-infinity-p seconds))))
+               (>= seconds 0))
+    (error "~a: expected a finite non-negative number of seconds, got ~s."
+           what seconds))
+  seconds)
+
+(defvar *sleep-function* #'cl:sleep
+  "The function that CPL:SLEEP calls with a number of seconds. A projection
+environment binds it to a function that advances its own clock instead of
+waiting in real time.")
+
+(defun sleep (seconds)
+  "Wait SECONDS (a finite non-negative real) by calling *SLEEP-FUNCTION*.
+Inside a plan the wait can be cut short by evaporation of the task."
+  (check-real-seconds seconds 'sleep)
+  (funcall *sleep-function* seconds)
+  nil)
+
+;;; Logging
+
+(defvar *log-stream* *standard-output*
+  "The stream that LOG-MESSAGE writes to. Bound per thread or set globally;
+child tasks inherit the binding of their parent.")
+
+(defvar *log-tags* '()
+  "The list of tags LOG-INFO, LOG-WARN, LOG-ERROR and LOG-DEBUG print in front
+of a message, e.g. (PICK-PLACE PICK-UP).")
+
+(defvar *log-level* :info
+  "The least severe level that is printed: one of :DEBUG, :INFO, :WARN, :ERROR.")
+
+(defparameter +log-levels+ '(:debug :info :warn :error))
+
+(defvar *log-lock* (bt:make-lock "cpl log")
+  "Serialises writes of whole log lines.")
+
+(defun level-rank (level)
+  (or (position level +log-levels+)
+      (error "Unknown log level ~s: expected one of ~{~s~^, ~}." level +log-levels+)))
+
+(defun format-unix-time (time)
+  "TIME (unix seconds) as a string with exactly three decimals."
+  (multiple-value-bind (seconds fraction) (floor time)
+    (let ((millis (floor (* fraction 1000))))
+      (format nil "~d.~3,'0d" seconds (min millis 999)))))
+
+(defun log-message (level tags format-control &rest format-arguments)
+  "Write one line `[(TAG ...) LEVEL] 1649925566.714: message' to *LOG-STREAM*
+when LEVEL (:DEBUG, :INFO, :WARN or :ERROR) is at least *LOG-LEVEL*. TAGS is a
+symbol or a list of symbols. Whole lines are written atomically, so lines from
+concurrent tasks do not interleave. Returns the message string, or NIL when the
+level is filtered out."
+  (let ((rank (level-rank level)))
+    (unless (stringp format-control)
+      (error "log-message: expected a format control string, got ~s." format-control))
+    (when (>= rank (level-rank *log-level*))
+      (let* ((message (apply #'format nil format-control format-arguments))
+             (line (format nil "[~:@(~a~) ~a] ~a: ~a"
+                           (if (listp tags) (format nil "~a" tags) (format nil "(~a)" tags))
+                           (symbol-name level)
+                           (format-unix-time (unix-time))
+                           message))
+             (stream *log-stream*))
+        (bt:with-lock-held (*log-lock*)
+          (fresh-line stream)
+          (write-line line stream)
+          (force-output stream))
+        message))))
+
+(defun log-debug (format-control &rest format-arguments)
+  "Log at level :DEBUG with the tags in *LOG-TAGS*."
+  (apply #'log-message :debug *log-tags* format-control format-arguments))
+
+(defun log-info (format-control &rest format-arguments)
+  "Log at level :INFO with the tags in *LOG-TAGS*."
+  (apply #'log-message :info *log-tags* format-control format-arguments))
+
+(defun log-warn (format-control &rest format-arguments)
+  "Log at level :WARN with the tags in *LOG-TAGS*."
+  (apply #'log-message :warn *log-tags* format-control format-arguments))
+
+(defun log-error (format-control &rest format-arguments)
+  "Log at level :ERROR with the tags in *LOG-TAGS*."
+  (apply #'log-message :error *log-tags* format-control format-arguments))
+
+(defmacro with-log-tags ((&rest tags) &body body)
+  "Run BODY with TAGS (evaluated) appended to *LOG-TAGS*."
+  `(let ((*log-tags* (append *log-tags* (list ,@tags))))
+     ,@body))

@@ -1,0 +1,223 @@
+;;;; Tasks: real threads that run plan code, inherit the plan's special
+;;;; bindings, report success or failure to their parent and can be evaporated.
+
+(in-package :cram-language)
+
+(defvar *current-task* nil
+  "The task whose thread is running, NIL outside any TOP-LEVEL.")
+
+(defvar *inherited-specials*
+  '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
+    *debug-io* *terminal-io* *package* *readtable*
+    *log-stream* *log-tags* *log-level* *sleep-function*)
+  "Special variables whose values a child task thread starts with, taken from
+the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
+projection environment's clock or the current designators.")
+
+(defvar *evaporation-target* nil
+  "Inside a task's thread, the task while it may be evaporated.")
+
+(defstruct (task-group (:constructor make-task-group ()))
+  (lock (bt:make-lock "cpl task group"))
+  (condition (bt:make-condition-variable :name "cpl task group"))
+  (tasks '())
+  (finished 0 :type integer))
+
+(defstruct (task (:constructor %make-task) (:copier nil))
+  "A plan task: a thread running a piece of plan code."
+  (name nil)
+  (parent nil)
+  (index 0 :type integer)
+  (group nil)
+  (thread nil)
+  (status :created :type keyword)
+  (values '())
+  (failure nil)
+  (finish-order nil)
+  (evaporate-requested nil)
+  (evaporating nil))
+
+(setf (documentation 'task-name 'function) "The name of a task."
+      (documentation 'task-status 'function)
+      "One of :CREATED, :RUNNING, :SUCCEEDED, :FAILED, :EVAPORATED."
+      (documentation 'task-parent 'function) "The task that started this one, NIL for a top-level task.")
+
+(defmethod print-object ((task task) stream)
+  (print-unreadable-object (task stream :type t :identity t)
+    (format stream "~a ~(~a~)" (task-name task) (task-status task))))
+
+(defun current-task-p ()
+  "True inside the thread of a running plan task."
+  (not (null *current-task*)))
+
+(defun current-task-evaporating-p ()
+  (and *current-task* (task-evaporating *current-task*)))
+
+(defun require-task (form)
+  "Signal NOT-INSIDE-PLAN-ERROR naming FORM unless a task is running."
+  (unless *current-task*
+    (error 'not-inside-plan-error :form form)))
+
+(defun capture-inherited-specials ()
+  (let ((symbols '()) (values '()))
+    (dolist (symbol *inherited-specials*)
+      (unless (and (symbolp symbol) symbol)
+        (error "*inherited-specials* must hold symbols, found ~s." symbol))
+      (when (and (boundp symbol) (not (member symbol symbols)))
+        (push symbol symbols)
+        (push (symbol-value symbol) values)))
+    (cons symbols values)))
+
+(defun task-done-p (task)
+  (member (task-status task) '(:succeeded :failed :evaporated)))
+
+(defun finish-task (task status values failure)
+  (let ((group (task-group task)))
+    (bt:with-lock-held ((task-group-lock group))
+      (setf (task-status task) status
+            (task-values task) values
+            (task-failure task) failure
+            (task-finish-order task) (incf (task-group-finished group)))
+      (sb-thread:condition-broadcast (task-group-condition group)))))
+
+(defun evaporate-self (task)
+  "Run by an interrupt inside TASK's thread: unwind it if it may be evaporated."
+  (when (eq *evaporation-target* task)
+    (setf (task-evaporating task) t)
+    (throw task :evaporated)))
+
+(defun execute-task (task thunk node)
+  "The body of a task thread: run THUNK, classify the outcome, report it."
+  (let ((status :evaporated) (values '()) (failure nil))
+    (catch task
+      (let ((*evaporation-target* task))
+        (when (task-evaporate-requested task)
+          (setf (task-evaporating task) t)
+          (throw task :evaporated))
+        (block run
+          (handler-bind ((plan-failure
+                           (lambda (c)
+                             (setf failure c status :failed)
+                             (return-from run)))
+                         (error
+                           (lambda (c)
+                             (setf failure (make-condition 'common-lisp-error-envelope
+                                                           :error c)
+                                   status :failed)
+                             (return-from run))))
+            (setf values (multiple-value-list
+                          (if node (run-in-node node thunk) (funcall thunk)))
+                  status :succeeded)))))
+    (finish-task task status values failure)))
+
+(defun spawn-task (name group index thunk &key node-kind node-name node)
+  "Start a thread running THUNK as a child task of the current task, in GROUP.
+With NODE-KIND a task tree node of that kind is created for it; with NODE the
+given node is used."
+  (let* ((task (%make-task :name name :parent *current-task* :index index
+                           :group group :status :running))
+         (bindings (capture-inherited-specials))
+         (parent-node *task-tree-node*)
+         (node (or node
+                   (and node-kind parent-node
+                        (make-task-tree-node node-kind (or node-name name)
+                                             :parent parent-node)))))
+    (sb-sys:without-interrupts
+      (bt:with-lock-held ((task-group-lock group))
+        (push task (task-group-tasks group)))
+      (setf (task-thread task)
+            (bt:make-thread
+             (lambda ()
+               (progv (car bindings) (cdr bindings)
+                 (let ((*current-task* task)
+                       (*task-tree-node* parent-node)
+                       (*evaporation-target* nil))
+                   (execute-task task thunk node))))
+             :name (format nil "cpl ~a" name))))
+    task))
+
+(defun evaporate-task (task)
+  "Ask TASK's thread to unwind, unless it has finished already."
+  (let ((thread (task-thread task)))
+    (when (and thread
+               (not (task-evaporate-requested task))
+               (not (task-done-p task)))
+      (setf (task-evaporate-requested task) t)
+      (handler-case (bt:interrupt-thread thread (lambda () (evaporate-self task)))
+        (error () nil)))))
+
+(defun evaporate-and-join (group)
+  "Evaporate every unfinished task of GROUP and wait for all their threads."
+  (sb-sys:without-interrupts
+    (let ((tasks (bt:with-lock-held ((task-group-lock group))
+                   (copy-list (task-group-tasks group)))))
+      (mapc #'evaporate-task tasks)
+      (dolist (task tasks)
+        (let ((thread (task-thread task)))
+          (when thread
+            (sb-thread:join-thread thread :default nil))
+          (unless (task-done-p task)
+            (setf (task-status task) :evaporated)))))))
+
+(defun group-tasks-in-order (group)
+  (sort (copy-list (task-group-tasks group)) #'< :key #'task-index))
+
+(defun run-task-group (name thunks decide &key (node-kind :par-child) node-names)
+  "Run each of THUNKS in its own child task and wait until DECIDE, called with
+the tasks in textual order under the group lock, returns a non-NIL decision
+\(:SUCCEEDED values) or (:FAILED condition). Unfinished children are evaporated
+and all threads joined before this returns. Returns the decision."
+  (let ((group (make-task-group)))
+    (unwind-protect
+         (progn
+           (loop for thunk in thunks
+                 for index from 0
+                 do (spawn-task (format nil "~a child ~d" name (1+ index))
+                                group index thunk
+                                :node-kind node-kind
+                                :node-name (or (nth index node-names)
+                                               (format nil "child ~d" (1+ index)))))
+           (let ((tasks (group-tasks-in-order group))
+                 (lock (task-group-lock group)))
+             (bt:with-lock-held (lock)
+               (loop
+                 (let ((decision (funcall decide tasks)))
+                   (when decision (return decision)))
+                 (sb-thread:condition-wait (task-group-condition group) lock)))))
+      (evaporate-and-join group))))
+
+(defun resignal-failure (condition)
+  "Signal CONDITION, a failure that came from a child task, in this task."
+  (fail condition))
+
+(defun call-as-top-level (name thunk)
+  "Run THUNK as the top-level task named NAME in a new thread, with a fresh
+task tree, and wait for it. Returns its values; a failure that escapes it is
+signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
+  (when *current-task*
+    (error 'nested-top-level-error :name name :outer *current-task*))
+  (let* ((root (make-task-tree-node :top-level name))
+         (group (make-task-group))
+         (*task-tree-node* nil))
+    (setf *last-task-tree* root)
+    (let ((decision
+            (unwind-protect
+                 (progn
+                   (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
+                   (let ((task (first (task-group-tasks group)))
+                         (lock (task-group-lock group)))
+                     (bt:with-lock-held (lock)
+                       (loop
+                         (case (task-status task)
+                           (:succeeded (return (list :succeeded (task-values task))))
+                           ((:failed :evaporated)
+                            (return (list (task-status task) (task-failure task)))))
+                         (sb-thread:condition-wait (task-group-condition group) lock)))))
+              (evaporate-and-join group))))
+      (destructuring-bind (status payload) decision
+        (ecase status
+          (:succeeded (values-list payload))
+          (:failed (if (typep payload 'common-lisp-error-envelope)
+                       (error (envelop-error payload))
+                       (error payload)))
+          (:evaporated (error "The top-level task ~s was evaporated." name)))))))
