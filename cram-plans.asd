@@ -223,10 +223,21 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :serial t
   :components ((:file "executive-tests")))
 
+(defsystem "cram-plans-tests/btr"
+  :depends-on ("cram-plans-tests/base" "cram-bullet-reasoning" "cram-pr2-description")
+  :pathname "tests/"
+  :components ((:file "btr-tests")))
+
+(defsystem "cram-plans-tests/scripts"
+  :depends-on ("cram-plans-tests/base")
+  :pathname "tests/"
+  :components ((:file "scripts-tests")))
+
 (defsystem "cram-plans-tests"
   :description "Every FiveAM suite of cram-plans, under the suite CRAM-PLANS-TESTS:ALL."
   :depends-on ("cram-plans-tests/utilities" "cram-plans-tests/prolog"
                "cram-plans-tests/transforms" "cram-plans-tests/native"
                "cram-plans-tests/language"
                "cram-plans-tests/robots"
-               "cram-plans-tests/designators" "cram-plans-tests/executive"))
+               "cram-plans-tests/designators" "cram-plans-tests/executive"
+               "cram-plans-tests/btr" "cram-plans-tests/scripts"))

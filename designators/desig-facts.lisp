@@ -3,9 +3,12 @@
 
 (in-package :cram-designators)
 
-(defun designator-property-pairs (designator)
-  "The entries of DESIGNATOR as (KEY VALUE) lists (the first value of each entry)."
-  (mapcar (lambda (entry) (list (car entry) (second entry))) (description designator)))
+(def-native-predicate designator-entries (m cont designator entries)
+  ;; (designator-entries ?designator ?entries): the description of a bound designator
+  (let ((d (deref-term designator)))
+    (when (typep d 'designator)
+      (and (unify-terms m entries (description d))
+           (solve-continue cont)))))
 
 (def-fact-group designator-grounding-interfaces (action-grounding motion-grounding
                                                  location-grounding)
@@ -29,9 +32,10 @@
 
 (def-fact-group designator-inspection ()
   (<- (desig-prop ?designator (?key ?value))
-    (lisp-pred designator-p ?designator)
-    (lisp-fun designator-property-pairs ?designator ?pairs)
-    (member (?key ?value) ?pairs))
+    (designator-entries ?designator ?entries)
+    (member (?key ?value) ?entries))
+  (<- (designator ?type ?description ?designator)
+    (lisp-fun make-designator ?type ?description ?designator))
   (<- (desig-description ?designator ?description)
     (lisp-pred designator-p ?designator)
     (lisp-fun description ?designator ?description))
@@ -75,8 +79,11 @@ Extendable: plan layers add rules per action type.")
 motion designator to a command list (command argument...). Extendable.")
         (location-grounding "Prolog predicate (location-grounding ?designator ?solution): one
 candidate location per proof; (POSE p) and (POSES list) are grounded here. Extendable.")
-        (desig-prop "Prolog predicate (desig-prop ?designator (?key ?value)): the entries of a
-bound designator; keys are keywords.")
+        (desig-prop "Prolog predicate (desig-prop ?designator (?key ?value)): the single-valued
+entries of a bound designator; keys are keywords.")
+        (designator "The class of all designators; also the Prolog predicate (designator ?type
+?description ?designator), which makes a new designator of ?type (e.g. :action) from the
+bound ?description, a list of (key value...) entries, as MAKE-DESIGNATOR.")
         (desig-description "Prolog predicate (desig-description ?designator ?description).")
         (desig-class "Prolog predicate (desig-class ?designator ?type): the type keyword.")
         (action-desig? "Prolog predicate (action-desig? ?d): ?d is an action designator.")

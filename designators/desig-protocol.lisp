@@ -145,8 +145,9 @@ the result in its data."))
 (defun normalize-description (description)
   "DESCRIPTION checked and normalised to a fresh list of (KEYWORD VALUE...) lists. A dotted
 entry (KEY . VALUE) with an atomic VALUE becomes (KEY VALUE)."
-  (unless (listp description)
-    (error "Designator description ~s: expected a list of (KEY VALUE...) entries." description))
+  (unless (and (listp description) (null (cdr (last description))))
+    (error "Designator description ~s: expected a proper list of (KEY VALUE...) entries."
+           description))
   (loop for entry in description
         collect (cond ((and (consp entry) (listp (cdr entry)))
                        (cons (normalize-key (car entry) entry) (copy-list (cdr entry))))

@@ -47,7 +47,7 @@ It stays valid when WORLD is destroyed, until DESTROY-CHAIN."
     (with-vector-pointers ((pq qv) (po out)) (ccall "cn_chain_fk" chain pq po))
     out))
 
-(defun chain-ik (chain target-pose &key seed (max-restarts 50) (position-tolerance 1d-3)
+(defun chain-ik (chain target-pose &key seed (max-restarts 200) (position-tolerance 1d-3)
                                         (rotation-tolerance 1d-2) (random-seed 1))
   "Joint values (DVEC) placing CHAIN's tip at TARGET-POSE (in the base link frame), within
 the joint limits, starting from SEED (default: middle of the limits) and then from random

@@ -52,6 +52,17 @@
     (is (not (desig:effective fresh)))
     (is (eq 'test-plan-a (first (desig:reference fresh))))))
 
+(test prolog-designator-construction
+  (let* ((bindings (first (prolog:prolog '(and (desig:designator :action ((:type :going) (:arm ?a))
+                                                                 ?d)
+                                               (desig:desig-prop ?d (:type ?type)))
+                                         '((?a . :left)))))
+         (d (cut:var-value '?d bindings))
+         (type (cut:var-value '?type bindings)))
+    (is (typep d 'desig:action-designator))
+    (is (equal '((:type :going) (:arm :left)) (desig:description d)))
+    (is (eq :going type))))
+
 (test prolog-inspection-predicates
   (let* ((d (desig:a location (pose 7) (side left)))
          (type (cut:var-value '?type (first (prolog:prolog `(desig:desig-class ,d ?type)))))

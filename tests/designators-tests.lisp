@@ -81,7 +81,8 @@
     (is (equal '((:on "table") (:name "spot") (:pose 3)) (desig:description d))))
   (signals error (desig:make-designator :nonsense '((:a 1))))
   (signals error (desig:make-designator :action '(not-a-list)))
-  (signals error (desig:make-designator :action '(("key" 1)))))
+  (signals error (desig:make-designator :action '(("key" 1))))
+  (signals error (desig:make-designator :action '((:a 1) . 5))))
 
 ;;; Properties
 

@@ -184,8 +184,11 @@
   ;; one of the consistent states, never a torn or failed one
   (let* ((tf (make-test-tree :stamps '(100000 1 0)))
          (n 3000)
+         (reading nil)
          (writer (bt:make-thread
                   (lambda ()
+                    ;; start writing only once the reader runs, so the two overlap
+                    (loop until reading do (bt:thread-yield))
                     (dotimes (i n)
                       (cl-tf:set-transform tf (make-transform-stamped
                                                "odom_combined" "base_footprint" i
@@ -193,13 +196,14 @@
                                                (make-identity-rotation)))))
                   :name "tf writer"))
          (bad 0) (looked 0))
-    (loop while (bt:thread-alive-p writer)
-          do (let* ((tr (lookup-transform tf "map" "base_footprint"))
+    (setf reading t)
+    (loop do (let* ((tr (lookup-transform tf "map" "base_footprint"))
                     (k (stamp tr)))
                (incf looked)
                ;; base in map is (1, 2 + k, 0) with the stamp k of the odom link
                (unless (close-transform-p tr (list 1 (+ 2 k) 0) 90 1d-9)
-                 (incf bad))))
+                 (incf bad)))
+          while (bt:thread-alive-p writer))
     (bt:join-thread writer)
     (is (plusp looked))
     (is (zerop bad) "~d of ~d lookups were inconsistent" bad looked)

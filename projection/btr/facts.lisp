@@ -88,7 +88,7 @@
 
   (<- (item ?world ?name)
     (%object ?world ?name ?o)
-    (lisp-type ?o item))
+    (lisp-pred typep ?o item))
 
   (<- (item-type ?world ?name ?type)
     (%object ?world ?name ?o)
@@ -97,7 +97,7 @@
 
   (<- (robot-object ?world ?name)
     (%object ?world ?name ?o)
-    (lisp-type ?o robot-object))
+    (lisp-pred typep ?o robot-object))
 
   (<- (pose ?world ?name ?pose)
     (%object ?world ?name ?o)
@@ -167,13 +167,13 @@
 (def-fact-group robot-model-facts ()
   (<- (link ?world ?robot ?link)
     (%object ?world ?robot ?o)
-    (lisp-type ?o robot-object)
+    (lisp-pred typep ?o robot-object)
     (lisp-fun link-names ?o ?links)
     (member ?link ?links))
 
   (<- (link-pose ?world ?robot ?link ?pose)
     (%object ?world ?robot ?o)
-    (lisp-type ?o robot-object)
+    (lisp-pred typep ?o robot-object)
     (-> (bound ?link)
         (true)
         (and (lisp-fun link-names ?o ?links) (member ?link ?links)))
@@ -181,7 +181,7 @@
 
   (<- (joint-state ?world ?robot ?joint ?state)
     (%object ?world ?robot ?o)
-    (lisp-type ?o robot-object)
+    (lisp-pred typep ?o robot-object)
     (-> (bound ?joint)
         (lisp-fun joint-state ?o ?joint ?state)
         (and (lisp-fun joint-states ?o ?states)
@@ -191,7 +191,7 @@
     (bullet-world ?world)
     (robot-object ?world ?robot)
     (lisp-fun attachment-list ?world ?robot ?attachments)
-    (-> (and (bound ?object) (lisp-type ?object object))
+    (-> (and (bound ?object) (lisp-pred typep ?object object))
         (and (lisp-fun name ?object ?object-name)
              (member (?link ?object-name) ?attachments))
         (member (?link ?object) ?attachments)))
@@ -236,7 +236,7 @@
 
   (<- (supported-by ?world ?object ?support)
     (contact ?world ?object ?support)
-    (above ?world ?object ?support)))
+    (lisp-pred supported-by-p ?world ?object ?support)))
 
 ;;; ---- visibility -------------------------------------------------------------------------------------
 

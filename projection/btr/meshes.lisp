@@ -89,3 +89,15 @@ entries are replaced. Returns the keywords."
   (values (native:add-mesh (world-handle world) pose (namestring (mesh-path mesh))
                            :mass (mass-arg mass ":mesh") :scale scale)
           'item (if (keywordp mesh) (list mesh) '(:mesh))))
+
+(defun project-resources-directory ()
+  "The resources/ directory of cram-plans (models, meshes, maps)."
+  (asdf:system-relative-pathname "cram-bullet-reasoning" "resources/"))
+
+(defun register-project-meshes ()
+  "Register the ROS package cram_plans_resources (this project's resources/) and put its meshes
+into *MESH-FILES* (:bottle, :mug, :cup, :bowl, :fork-plastic, :breakfast-cereal, :milk, ...)."
+  (register-ros-package "cram_plans_resources" (project-resources-directory))
+  (add-objects-to-mesh-list "cram_plans_resources" :directory "meshes"))
+
+(register-project-meshes)

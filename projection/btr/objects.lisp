@@ -3,7 +3,15 @@
 
 (in-package :cram-bullet-reasoning)
 
-;;; ---- poses -------------------------------------------------------------------------------
+;;; ---- numbers and poses ---
+
+(defun to-double (x)
+  "The real X as a double float; a single float by its printed decimal (0.2 → 0.2d0)."
+  (if (typep x 'single-float)
+      (let ((*read-default-float-format* 'double-float))
+        (values (read-from-string (let ((*read-default-float-format* 'single-float))
+                                    (prin1-to-string x)))))
+      (coerce x 'double-float)))
 
 (defun ensure-pose (pose &optional (what "pose"))
   "POSE as a CL-TRANSFORMS:POSE. Accepts a pose (or pose-stamped), ((x y z) (qx qy qz qw)),

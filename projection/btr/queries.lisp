@@ -87,8 +87,9 @@ during 5 s of simulation of a copy of WORLD."
             always (multiple-value-bind (d a) (pose-distance p (pose (object *current-bullet-world* n)))
                      (and (< d *stable-distance*) (< a *stable-angle*)))))))
 
-(defun aabb-center-z (object)
-  (multiple-value-bind (lo hi) (aabb object)
+(defun aabb-center-z (object &optional link)
+  "Height of the centre of the bounding box of OBJECT (or of its link named LINK)."
+  (multiple-value-bind (lo hi) (aabb object (and link (link-index object link)))
     (/ (+ (cl-transforms:z lo) (cl-transforms:z hi)) 2)))
 
 (defun above-p (world a b)
@@ -100,8 +101,11 @@ during 5 s of simulation of a copy of WORLD."
   (< (aabb-center-z (ensure-object world a)) (aabb-center-z (ensure-object world b))))
 
 (defun supported-by-p (world object support)
-  "True when OBJECT touches SUPPORT and is above it."
-  (and (objects-in-contact-p world object support) (above-p world object support)))
+  "True when OBJECT touches SUPPORT and is above the part it touches (for an articulated
+SUPPORT, the touched link, not the whole environment)."
+  (let ((o (ensure-object world object)) (s (ensure-object world support)))
+    (loop for (lo ls) in (contact-links world o s)
+            thereis (> (aabb-center-z o lo) (aabb-center-z s ls)))))
 
 ;;; ---- snapshots of a world (pose and joint state, not geometry) ---------------------------------
 

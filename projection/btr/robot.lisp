@@ -94,7 +94,7 @@ table name → value. All joints are set at once, then links and attached object
                (unless (and (realp v) (< (abs v) 1d6))
                  (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
                (setf (aref indices i) (joint-index robot n)
-                     (aref values i) (coerce v 'double-float)))
+                     (aref values i) (to-double v)))
       (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
       robot)))
 
@@ -174,7 +174,8 @@ Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only r
                         (unless link (btr-fail "ATTACH-OBJECT: attaching ~s to ~s needs :link" (name object) (name parent)))
                         (link-index parent link))
                        (t -1))))
-    (native:attach (world-handle world) (object-handle object) (object-handle parent) link-i (if loose 1 0))
+    (native:attach (world-handle world) (object-handle object) (object-handle parent)
+                   :link link-i :loose loose)
     (when (typep parent 'robot-object)
       (setf (%attached parent)
             (append (remove-if (lambda (a) (and (eq (first a) (name object)) (equal (second a) link)))

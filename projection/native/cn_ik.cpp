@@ -136,7 +136,7 @@ int cn_chain_create(int wh, int r, const char *base, const char *tip) {
     Eigen::Matrix<double, 6, 1> L;
     L << 1, 1, 1, 0.1, 0.1, 0.1;
     c->fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(c->chain);
-    c->ik = std::make_unique<KDL::ChainIkSolverPos_LMA>(c->chain, L, 1e-6, 150, 1e-12);
+    c->ik = std::make_unique<KDL::ChainIkSolverPos_LMA>(c->chain, L, 1e-5, 100, 1e-12);
     std::lock_guard<std::mutex> lock(g_chain_mutex);
     int slot;
     if (!g_chain_free.empty()) {

@@ -166,7 +166,7 @@ int cn_ray_test(int world, const double *from3n, const double *to3n, int n,
  * rigid (loose = 0): obj keeps its transform relative to the link and is made kinematic;
  * loose = 1: only recorded. */
 int cn_attach(int world, int obj, int parent, int link, int loose);
-int cn_detach(int world, int obj, int parent);          /* parent -1: all of obj's        */
+int cn_detach(int world, int obj, int parent);  /* parent -1: all; -> number removed */
 /* records: obj, parent, link, loose -> count */
 int cn_attachments(int world, int *out4, int cap);
 

@@ -3,7 +3,7 @@
 #
 # Usage: tools/ros/rviz-screenshot.sh [world|pepper] [OUT.png] [roslaunch arg:=value ...]
 #   default: world docs/rviz-world.png   (pepper: docs/rviz-pepper.png)
-#   RVIZ_WAIT=seconds to let rviz draw before the screenshot (default 25)
+#   RVIZ_WAIT=seconds to let rviz draw before the screenshot (default 15)
 #
 # Starts its own Xvfb, a private roscore on a free loopback port, the launch file
 # with rviz:=true and robot_tf:=true (so the robot is drawn without the Lisp side),
@@ -20,7 +20,7 @@ case $which in
 esac
 out=${2:-$root/docs/rviz-$which.png}
 shift $(($# >= 2 ? 2 : $#))
-wait_s=${RVIZ_WAIT:-25}
+wait_s=${RVIZ_WAIT:-15}
 
 ros_private_env
 trap 'ros_stop_all' EXIT

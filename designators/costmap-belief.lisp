@@ -1,0 +1,219 @@
+;;;; Costmaps from the Bullet belief state: occupancy of the environment's static geometry,
+;;;; line of sight by ray casts, base poses in collision.
+
+(in-package :cram-location-costmap)
+
+(defparameter *occupancy-z-min* 0.05d0
+  "Geometry below this height (metres) does not block the robot base.")
+
+(defparameter *occupancy-z-max* 1.9d0
+  "Geometry above this height (metres) does not block the robot base.")
+
+(defvar *occupancy-cache* '()
+  "Recently rasterised occupancy grids: a list of (key . grid), newest first.")
+
+(defparameter *occupancy-cache-size* 8 "How many occupancy grids *OCCUPANCY-CACHE* keeps.")
+
+(defun vector-key (pose)
+  (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
+    (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
+          (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q))))
+
+(defun static-obstacles (world)
+  "The articulated objects of WORLD that are not the robot: the environments."
+  (let ((robot (btr:get-robot-object world)))
+    (remove-if-not (lambda (o) (and (btr:robot-object-p o) (not (eq o robot))))
+                   (btr:objects world))))
+
+(defun rasterise-box (bits origin-x origin-y resolution x0 y0 x1 y1 padding)
+  "Mark the cells of BITS whose centres are within PADDING of the rectangle [X0 X1] x [Y0 Y1]."
+  (declare (type (simple-array bit (* *)) bits) (type double-float origin-x origin-y resolution
+                                                      x0 y0 x1 y1 padding))
+  (let* ((rows (array-dimension bits 0)) (cols (array-dimension bits 1))
+         (c0 (max 0 (floor (- x0 padding origin-x) resolution)))
+         (c1 (min (1- cols) (floor (- (+ x1 padding) origin-x) resolution)))
+         (r0 (max 0 (floor (- y0 padding origin-y) resolution)))
+         (r1 (min (1- rows) (floor (- (+ y1 padding) origin-y) resolution)))
+         (p2 (* padding padding)))
+    (loop for r from r0 to r1
+          for y = (+ origin-y (* (+ r 0.5d0) resolution))
+          for dy = (max 0d0 (- y0 y) (- y y1))
+          do (loop for c from c0 to c1
+                   for x = (+ origin-x (* (+ c 0.5d0) resolution))
+                   for dx = (max 0d0 (- x0 x) (- x x1))
+                   when (<= (+ (* dx dx) (* dy dy)) p2)
+                     do (setf (aref bits r c) 1)))))
+
+(defun environment-occupancy-grid (&key (world btr:*current-bullet-world*) (padding 0d0)
+                                        width height origin-x origin-y resolution
+                                        (z-min *occupancy-z-min*) (z-max *occupancy-z-max*))
+  "The occupancy grid of the static geometry of WORLD: every link of every environment
+(articulated object other than the robot) whose bounding box reaches between Z-MIN and Z-MAX
+occupies the cells within PADDING metres of its box.  The grid geometry defaults to the costmap
+metadata.  Grids are cached per environment pose and joint state."
+  (let* ((size (unless (and width height) (costmap-metadata-value 'costmap-size :arity 2)))
+         (origin (unless (and origin-x origin-y) (costmap-metadata-value 'costmap-origin :arity 2)))
+         (width (or width (first size))) (height (or height (second size)))
+         (origin-x (coerce (or origin-x (first origin)) 'double-float))
+         (origin-y (coerce (or origin-y (second origin)) 'double-float))
+         (resolution (coerce (or resolution (costmap-metadata-value 'costmap-resolution)) 'double-float))
+         (padding (progn (unless (and (realp padding) (<= 0 padding 100))
+                           (error "ENVIRONMENT-OCCUPANCY-GRID: padding ~s, expected a real ~
+                                   from 0 to 100 metres." padding))
+                         (coerce padding 'double-float)))
+         (environments (static-obstacles world))
+         (key (list* width height origin-x origin-y resolution padding z-min z-max
+                     (mapcar (lambda (e) (list (btr:name e) (vector-key (btr:pose e))
+                                               (mapcar #'cdr (btr:joint-states e))))
+                             environments)))
+         (cached (assoc key *occupancy-cache* :test #'equalp)))
+    (if cached
+        (cdr cached)
+        (let* ((grid (make-occupancy-grid width height origin-x origin-y resolution))
+               (bits (occupancy-bits grid)))
+          (dolist (env environments)
+            (loop for nil in (btr:link-names env)
+                  for i from 0
+                  do (multiple-value-bind (lo hi) (btr:aabb env i)
+                       (when (and (> (- (cl-transforms:x hi) (cl-transforms:x lo)) 1d-6)
+                                  (> (- (cl-transforms:y hi) (cl-transforms:y lo)) 1d-6)
+                                  (> (cl-transforms:z hi) z-min)
+                                  (< (cl-transforms:z lo) z-max))
+                         (rasterise-box bits origin-x origin-y resolution
+                                        (cl-transforms:x lo) (cl-transforms:y lo)
+                                        (cl-transforms:x hi) (cl-transforms:y hi) padding)))))
+          (push (cons key grid) *occupancy-cache*)
+          (when (> (length *occupancy-cache*) *occupancy-cache-size*)
+            (setf *occupancy-cache* (subseq *occupancy-cache* 0 *occupancy-cache-size*)))
+          grid))))
+
+;;; ---- line of sight ---------------------------------------------------------------------------------
+
+(defun cast-rays (world from to)
+  "Cast rays from the flat double vectors FROM to TO (3 per ray) in WORLD; the list of hits."
+  (cram-native:ray-test (btr:world-handle world) from to))
+
+(defun hit-clear-p (hit target-handle)
+  "True when a ray HIT (as from CRAM-NATIVE:RAY-TEST) means the target is in sight: nothing hit,
+or the first thing hit is the target object."
+  (or (null hit) (and target-handle (= (first hit) target-handle))))
+
+(defun object-handle-of (object)
+  (and object (btr::object-handle object)))
+
+(defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
+                                                                   target-object (stride 2))
+  "A cost function that is 1 at the map points from which the ray at CAMERA-HEIGHT to TARGET
+(a 3D point) reaches it (or its TARGET-OBJECT) unobstructed in WORLD, else 0.  On a grid it
+casts one ray per STRIDE x STRIDE block of cells that are not zero yet."
+  (let* ((tx (coerce (cl-transforms:x target) 'double-float))
+         (ty (coerce (cl-transforms:y target) 'double-float))
+         (tz (coerce (cl-transforms:z target) 'double-float))
+         (h (coerce camera-height 'double-float))
+         (handle (object-handle-of target-object)))
+    (unless (typep stride '(integer 1 64))
+      (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
+    (flet ((single (x y)
+             (let ((hit (first (cast-rays world
+                                          (make-array 3 :element-type 'double-float
+                                                        :initial-contents (list (coerce x 'double-float)
+                                                                                (coerce y 'double-float) h))
+                                          (make-array 3 :element-type 'double-float
+                                                        :initial-contents (list tx ty tz))))))
+               (if (hit-clear-p hit handle) 1d0 0d0))))
+      (make-cost-function
+       #'single
+       :name 'line-of-sight
+       :grid-evaluator
+       (lambda (costmap matrix r0 r1 c0 c1)
+         (declare (type (simple-array double-float (* *)) matrix))
+         (let ((blocks '()))
+           (loop for br from r0 below r1 by stride
+                 do (loop for bc from c0 below c1 by stride
+                          when (loop for r from br below (min r1 (+ br stride))
+                                       thereis (loop for c from bc below (min c1 (+ bc stride))
+                                                       thereis (> (aref matrix r c) 0d0)))
+                            do (push (cons br bc) blocks)))
+           (setf blocks (nreverse blocks))
+           (when blocks
+             (let* ((n (length blocks))
+                    (from (make-array (* 3 n) :element-type 'double-float))
+                    (to (make-array (* 3 n) :element-type 'double-float)))
+               (loop for (br . bc) in blocks for i from 0
+                     do (setf (aref from (* 3 i)) (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
+                              (aref from (+ 1 (* 3 i))) (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
+                              (aref from (+ 2 (* 3 i))) h
+                              (aref to (* 3 i)) tx (aref to (+ 1 (* 3 i))) ty (aref to (+ 2 (* 3 i))) tz))
+               (loop for (br . bc) in blocks
+                     for hit in (cast-rays world from to)
+                     unless (hit-clear-p hit handle)
+                       do (loop for r from br below (min r1 (+ br stride))
+                                do (loop for c from bc below (min c1 (+ bc stride))
+                                         do (setf (aref matrix r c) 0d0))))))))))))
+
+(defun view-target-points (target target-object &key (world btr:*current-bullet-world*))
+  "The points a line of sight must reach to see TARGET: its centre, and for an object the
+centre and top of its bounding box and the middles of its four vertical sides."
+  (declare (ignore world))
+  (if (null target-object)
+      (list target)
+      (multiple-value-bind (lo hi) (btr:aabb target-object)
+        (let* ((cx (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))
+               (cy (/ (+ (cl-transforms:y lo) (cl-transforms:y hi)) 2))
+               (cz (/ (+ (cl-transforms:z lo) (cl-transforms:z hi)) 2))
+               (sx (* 0.4d0 (- (cl-transforms:x hi) (cl-transforms:x lo))))
+               (sy (* 0.4d0 (- (cl-transforms:y hi) (cl-transforms:y lo))))
+               (top (- (cl-transforms:z hi) (* 0.1d0 (- (cl-transforms:z hi) (cl-transforms:z lo))))))
+          (list (cl-transforms:make-3d-vector cx cy cz)
+                (cl-transforms:make-3d-vector cx cy top)
+                (cl-transforms:make-3d-vector (- cx sx) cy cz)
+                (cl-transforms:make-3d-vector (+ cx sx) cy cz)
+                (cl-transforms:make-3d-vector cx (- cy sy) cz)
+                (cl-transforms:make-3d-vector cx (+ cy sy) cz))))))
+
+(defun line-of-sight-p (eye points target-object &key (world btr:*current-bullet-world*))
+  "True when every ray from EYE (a 3D point) to POINTS reaches its point, or TARGET-OBJECT,
+unobstructed in WORLD."
+  (let* ((n (length points))
+         (from (make-array (* 3 n) :element-type 'double-float))
+         (to (make-array (* 3 n) :element-type 'double-float))
+         (handle (object-handle-of target-object)))
+    (loop for p in points for i from 0
+          do (setf (aref from (* 3 i)) (coerce (cl-transforms:x eye) 'double-float)
+                   (aref from (+ 1 (* 3 i))) (coerce (cl-transforms:y eye) 'double-float)
+                   (aref from (+ 2 (* 3 i))) (coerce (cl-transforms:z eye) 'double-float)
+                   (aref to (* 3 i)) (coerce (cl-transforms:x p) 'double-float)
+                   (aref to (+ 1 (* 3 i))) (coerce (cl-transforms:y p) 'double-float)
+                   (aref to (+ 2 (* 3 i))) (coerce (cl-transforms:z p) 'double-float)))
+    (every (lambda (hit) (hit-clear-p hit handle)) (cast-rays world from to))))
+
+;;; ---- robot base poses in collision -------------------------------------------------------------------
+
+(defun floor-object-p (object)
+  (member :floor (btr:item-types object)))
+
+(defun robot-pose-collisions (robot-name pose &key (world btr:*current-bullet-world*))
+  "The names of the objects the robot ROBOT-NAME touches when it stands at POSE, checked in a
+copy of WORLD; the floor and the objects attached to the robot are left out."
+  (let ((pose (if (typep pose 'cl-transforms-stamped:pose-stamped)
+                  (cl-transforms-stamped:pose-stamped->pose pose)
+                  pose)))
+    (btr:with-copied-world (world)
+      (let* ((copy btr:*current-bullet-world*)
+             (robot (find-world-object robot-name copy)))
+        (unless (and robot (btr:robot-object-p robot))
+          (error "There is no robot ~s in the belief state (objects: ~{~s~^ ~})."
+                 robot-name (btr:object-names copy)))
+        (setf (btr:pose robot) pose)
+        (let ((attached (mapcar #'first (btr:attached-objects robot))))
+          (loop for name in (btr:find-objects-in-contact copy robot)
+                for object = (btr:object copy name)
+                unless (or (member name attached) (and object (floor-object-p object)))
+                  collect name))))))
+
+(defun find-world-object (name &optional (world btr:*current-bullet-world*))
+  "The object of WORLD called NAME, compared by symbol name (so :MUG-1 finds MUG-1), or NIL."
+  (or (and (symbolp name) (btr:object world name))
+      (let ((string (string name)))
+        (find-if (lambda (o) (string-equal (symbol-name (btr:name o)) string))
+                 (btr:objects world)))))

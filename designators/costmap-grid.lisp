@@ -1,0 +1,379 @@
+;;;; The grid location costmap: cost functions that multiply, normalised sampling from a
+;;;; seeded random state, orientation and height generators.
+
+(in-package :cram-location-costmap)
+
+;;; ---- random state --------------------------------------------------------------------------
+
+(defvar *costmap-random-state* (sb-ext:seed-random-state 1)
+  "The random state every costmap draws its own sampling seed from.  It is independent of
+CL:*RANDOM-STATE*; reseed it with SEED-COSTMAPS to get the same samples again.")
+
+(defun seed-costmaps (seed)
+  "Reseed *COSTMAP-RANDOM-STATE* with the non-negative integer SEED, so that the costmaps
+made from now on sample the same poses as after any earlier (SEED-COSTMAPS SEED)."
+  (unless (typep seed '(integer 0))
+    (error "SEED-COSTMAPS: the seed is ~s, expected a non-negative integer." seed))
+  (setf *costmap-random-state* (sb-ext:seed-random-state seed))
+  seed)
+
+;;; ---- conditions ------------------------------------------------------------------------------
+
+(define-condition invalid-probability-distribution (error)
+  ((costmap :initarg :costmap :initform nil :reader invalid-distribution-costmap)
+   (reason :initarg :reason :reader invalid-distribution-reason))
+  (:report (lambda (c s)
+             (format s "The location costmap ~a is not a probability distribution: ~a"
+                     (invalid-distribution-costmap c) (invalid-distribution-reason c))))
+  (:documentation "Signalled when a costmap cannot be sampled: every cell is zero, or a cost
+function produced a negative or non-finite value."))
+
+;;; ---- metadata ---------------------------------------------------------------------------------
+
+(defun costmap-metadata-value (predicate &key (arity 1) (default nil default-p))
+  "The first solution of the metadata PREDICATE (a symbol such as COSTMAP-PADDING) as one
+value, or as a list of ARITY values when ARITY > 1.  Without a solution, DEFAULT when given,
+else an error naming the predicate."
+  (let* ((vars (loop for i below arity collect (intern (format nil "?V~d" i) :cram-location-costmap)))
+         (solution (cut:lazy-car (prolog `(,predicate ,@vars)))))
+    (cond (solution
+           (let ((values (mapcar (lambda (v) (cut:var-value v solution)) vars)))
+             (dolist (v values)
+               (unless (realp v)
+                 (error "Costmap metadata (~(~a~) ...) gave ~s, expected real numbers."
+                        predicate values)))
+             (if (= arity 1) (first values) values)))
+          (default-p default)
+          (t (error "No costmap metadata (~(~a~)~{ ~a~}): declare it for the robot ~s, e.g. ~
+                     (def-fact-group my-metadata (costmap:~(~a~)) (<- (costmap:~(~:*~a~) ...)))."
+                    predicate vars rob-int:*robot-name* predicate)))))
+
+;;; ---- cost functions ----------------------------------------------------------------------------
+
+(defclass cost-function ()
+  ((name :initarg :name :initform nil :reader cost-function-name
+         :documentation "A symbol naming the function, for errors and pictures.")
+   (bounds :initarg :bounds :initform nil :reader cost-function-bounds
+           :documentation "NIL, or (x-min y-min x-max y-max) outside which the value is 0.")
+   (grid-evaluator :initarg :grid-evaluator :initform nil :reader cost-function-grid-evaluator
+                   :documentation "NIL, or a function (costmap matrix row-0 row-1 col-0 col-1)
+that multiplies the cells of MATRIX in the given index ranges by the function's values."))
+  (:metaclass sb-mop:funcallable-standard-class)
+  (:documentation "A cost function (x y) -> non-negative real that may know where it is zero
+(its bounds) and how to fill a whole grid quickly.  Plain functions (x y) work as well."))
+
+(defun make-cost-function (function &key name bounds grid-evaluator)
+  "A COST-FUNCTION calling FUNCTION (x y); BOUNDS (x-min y-min x-max y-max) tells where it can
+be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies a grid block."
+  (unless (functionp function)
+    (error "MAKE-COST-FUNCTION: expected a function of (x y), got ~s." function))
+  (when bounds
+    (unless (and (listp bounds) (= (length bounds) 4) (every #'realp bounds))
+      (error "MAKE-COST-FUNCTION: bounds ~s, expected (x-min y-min x-max y-max)." bounds)))
+  (let ((f (make-instance 'cost-function :name name :bounds bounds
+                                         :grid-evaluator grid-evaluator)))
+    (sb-mop:set-funcallable-instance-function f function)
+    f))
+
+(defmethod print-object ((f cost-function) stream)
+  (print-unreadable-object (f stream :type t :identity t)
+    (format stream "~@[~s~]" (cost-function-name f))))
+
+;;; ---- the costmap -----------------------------------------------------------------------------
+
+(defclass location-costmap ()
+  ((origin-x :initarg :origin-x :reader origin-x :type double-float
+             :documentation "Map x of the corner of cell (0 0).")
+   (origin-y :initarg :origin-y :reader origin-y :type double-float
+             :documentation "Map y of the corner of cell (0 0).")
+   (resolution :initarg :resolution :reader resolution :type double-float
+               :documentation "Cell size in metres.")
+   (width :initarg :width :reader width :documentation "Extent along x in metres.")
+   (height :initarg :height :reader height :documentation "Extent along y in metres.")
+   (columns :reader costmap-columns) (rows :reader costmap-rows)
+   (cost-functions :initform '() :accessor cost-functions
+                   :documentation "Entries (name function score), applied by ascending score.")
+   (orientation-generators :initform '() :accessor orientation-generators)
+   (height-generators :initform '() :accessor height-generators)
+   (matrix :initform nil :accessor %matrix)
+   (distribution :initform nil :accessor %distribution)
+   (random-state :initarg :random-state :reader costmap-random-state))
+  (:documentation "A grid over the map whose cell values are the product of the registered
+cost functions; samples are poses drawn with probability proportional to the cell values."))
+
+(defmethod print-object ((c location-costmap) stream)
+  (print-unreadable-object (c stream :type t :identity t)
+    (format stream "~dx~d cells of ~,3f m~@[ ~{~(~a~)~^*~}~]" (costmap-columns c) (costmap-rows c)
+            (resolution c) (mapcar #'first (cost-functions c)))))
+
+(defun make-location-costmap (&key width height resolution origin-x origin-y)
+  "A new, empty location costmap.  Every key left out comes from the metadata predicates
+COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
+  (let* ((size (unless (and width height) (costmap-metadata-value 'costmap-size :arity 2)))
+         (origin (unless (and origin-x origin-y) (costmap-metadata-value 'costmap-origin :arity 2)))
+         (width (or width (first size)))
+         (height (or height (second size)))
+         (resolution (or resolution (costmap-metadata-value 'costmap-resolution)))
+         (origin-x (or origin-x (first origin)))
+         (origin-y (or origin-y (second origin))))
+    (loop for (what value) in `(("width" ,width) ("height" ,height) ("resolution" ,resolution))
+          unless (and (realp value) (> value 0) (< value 1d4))
+            do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a positive real (metres)."
+                      what value))
+    (loop for (what value) in `(("origin x" ,origin-x) ("origin y" ,origin-y))
+          unless (and (realp value) (< (abs value) 1d6))
+            do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a finite real." what value))
+    (when (> (/ (* width height) (* resolution resolution)) 2.5d7)
+      (error "MAKE-LOCATION-COSTMAP: ~s x ~s m at ~s m resolution is more than 25 million ~
+              cells; use a coarser resolution." width height resolution))
+    (make-instance 'location-costmap
+                   :width width :height height
+                   :resolution (coerce resolution 'double-float)
+                   :origin-x (coerce origin-x 'double-float)
+                   :origin-y (coerce origin-y 'double-float)
+                   :random-state (sb-ext:seed-random-state
+                                  (random (expt 2 62) *costmap-random-state*)))))
+
+(defmethod initialize-instance :after ((c location-costmap) &key)
+  (setf (slot-value c 'columns) (max 1 (round (width c) (resolution c)))
+        (slot-value c 'rows) (max 1 (round (height c) (resolution c)))))
+
+(defun cell-center-x (costmap column)
+  "The map x of the centre of the cells in COLUMN."
+  (+ (origin-x costmap) (* (+ column 0.5d0) (resolution costmap))))
+
+(defun cell-center-y (costmap row)
+  "The map y of the centre of the cells in ROW."
+  (+ (origin-y costmap) (* (+ row 0.5d0) (resolution costmap))))
+
+(defun invalidate-costmap (costmap)
+  (setf (%matrix costmap) nil (%distribution costmap) nil)
+  costmap)
+
+(defgeneric costmap-generator-name->score (name)
+  (:documentation "The score that orders the cost function registered under NAME: functions
+with smaller scores are applied first.  Specialise it with (eql name) methods.")
+  (:method ((name t)) 10))
+
+(defun check-cost-function (function what)
+  (unless (or (functionp function) (and (symbolp function) (fboundp function)))
+    (error "~a: expected a function or a function name, got ~s." what function)))
+
+(defun register-cost-function (costmap function name &optional (score (costmap-generator-name->score name)))
+  "Add FUNCTION, a function (x y) -> non-negative real or a COST-FUNCTION, to COSTMAP under
+NAME.  The costmap's value is the product of all functions, applied in order of SCORE."
+  (unless (typep costmap 'location-costmap)
+    (error "REGISTER-COST-FUNCTION: expected a location costmap, got ~s." costmap))
+  (check-cost-function function "REGISTER-COST-FUNCTION")
+  (unless (realp score)
+    (error "REGISTER-COST-FUNCTION: score ~s of ~s, expected a real number." score name))
+  (setf (cost-functions costmap)
+        (stable-sort (append (cost-functions costmap)
+                             (list (list name (if (symbolp function) (fdefinition function) function)
+                                         score)))
+                     #'< :key #'third))
+  (invalidate-costmap costmap))
+
+(defun register-orientation-generator (costmap generator)
+  "Add GENERATOR, a function (x y previous-orientations) returning a list of quaternions, to
+COSTMAP.  Generators run in registration order, each given the previous one's result (the
+first is given the identity rotation)."
+  (check-cost-function generator "REGISTER-ORIENTATION-GENERATOR")
+  (setf (orientation-generators costmap) (append (orientation-generators costmap) (list generator)))
+  costmap)
+
+(defun register-height-generator (costmap generator)
+  "Add GENERATOR, a function (x y) returning a list of heights (z in metres), to COSTMAP.  The
+first registered generator gives the heights of the samples (default: 0)."
+  (check-cost-function generator "REGISTER-HEIGHT-GENERATOR")
+  (setf (height-generators costmap) (append (height-generators costmap) (list generator)))
+  costmap)
+
+(defun merge-costmaps (&rest costmaps)
+  "A new costmap on the grid of the first of COSTMAPS with the cost functions, orientation and
+height generators of all of them."
+  (let ((costmaps (remove nil (if (and (= (length costmaps) 1) (listp (first costmaps)))
+                                  (first costmaps) costmaps))))
+    (when (null costmaps) (error "MERGE-COSTMAPS: no costmap given."))
+    (dolist (c costmaps)
+      (unless (typep c 'location-costmap)
+        (error "MERGE-COSTMAPS: expected location costmaps, got ~s." c)))
+    (if (= (length costmaps) 1)
+        (first costmaps)
+        (let* ((first (first costmaps))
+               (merged (make-instance 'location-costmap
+                                      :width (width first) :height (height first)
+                                      :resolution (resolution first)
+                                      :origin-x (origin-x first) :origin-y (origin-y first)
+                                      :random-state (make-random-state
+                                                     (costmap-random-state first)))))
+          (dolist (c costmaps merged)
+            (loop for (name fn score) in (cost-functions c)
+                  do (register-cost-function merged fn name score))
+            (dolist (g (orientation-generators c)) (register-orientation-generator merged g))
+            (dolist (g (height-generators c)) (register-height-generator merged g)))))))
+
+;;; ---- computing the grid -----------------------------------------------------------------------
+
+(defun bounds->index-range (costmap bounds)
+  "(values row-0 row-1 col-0 col-1), end exclusive, of the cells whose centres lie in BOUNDS."
+  (let* ((res (resolution costmap)) (cols (costmap-columns costmap)) (rows (costmap-rows costmap)))
+    (if (null bounds)
+        (values 0 rows 0 cols)
+        (destructuring-bind (x0 y0 x1 y1) bounds
+          (flet ((lo (v origin n) (max 0 (min n (ceiling (- (/ (- v origin) res) 0.5d0)))))
+                 (hi (v origin n) (max 0 (min n (1+ (floor (- (/ (- v origin) res) 0.5d0)))))))
+            (values (lo y0 (origin-y costmap) rows) (hi y1 (origin-y costmap) rows)
+                    (lo x0 (origin-x costmap) cols) (hi x1 (origin-x costmap) cols)))))))
+
+(defun intersect-bounds (a b)
+  (cond ((null a) b) ((null b) a)
+        (t (list (max (first a) (first b)) (max (second a) (second b))
+                 (min (third a) (third b)) (min (fourth a) (fourth b))))))
+
+(defun costmap-support-bounds (costmap)
+  (reduce #'intersect-bounds
+          (mapcar (lambda (e) (and (typep (second e) 'cost-function)
+                                   (cost-function-bounds (second e))))
+                  (cost-functions costmap))
+          :initial-value nil))
+
+(defun check-cell-value (costmap name value x y)
+  (unless (and (realp value) (>= value 0) (< value most-positive-double-float))
+    (error 'invalid-probability-distribution
+           :costmap costmap
+           :reason (format nil "the cost function ~(~a~) gave ~s at (~,3f ~,3f), expected a ~
+                                finite non-negative real." name value x y))))
+
+(defun get-cost-map (costmap)
+  "The value grid of COSTMAP: a (rows x columns) double-float array, row = y index, column = x
+index; computed once and cached until another function is registered."
+  (or (%matrix costmap)
+      (let* ((rows (costmap-rows costmap)) (cols (costmap-columns costmap))
+             (m (make-array (list rows cols) :element-type 'double-float :initial-element 0d0)))
+        (declare (type (simple-array double-float (* *)) m))
+        (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
+          (when (and (< r0 r1) (< c0 c1))
+            (loop for r from r0 below r1 do (loop for c from c0 below c1 do (setf (aref m r c) 1d0)))
+            (loop for (name fn) in (cost-functions costmap)
+                  for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
+                  do (if evaluator
+                         (funcall evaluator costmap m r0 r1 c0 c1)
+                         (loop for r fixnum from r0 below r1
+                               for y = (cell-center-y costmap r)
+                               do (loop for c fixnum from c0 below c1
+                                        when (> (aref m r c) 0d0)
+                                          do (let* ((x (cell-center-x costmap c))
+                                                    (v (funcall fn x y)))
+                                               (check-cell-value costmap name v x y)
+                                               (setf (aref m r c) (* (aref m r c) (coerce v 'double-float))))))))))
+        (setf (%matrix costmap) m))))
+
+(defun get-map-value (costmap x y)
+  "The value of COSTMAP's cell containing the map point (X Y); 0 outside the grid."
+  (let* ((m (get-cost-map costmap))
+         (c (floor (- x (origin-x costmap)) (resolution costmap)))
+         (r (floor (- y (origin-y costmap)) (resolution costmap))))
+    (if (and (< -1 r (costmap-rows costmap)) (< -1 c (costmap-columns costmap)))
+        (aref m r c)
+        0d0)))
+
+;;; ---- sampling -------------------------------------------------------------------------------------
+
+(defstruct (distribution (:conc-name dist-))
+  (cells #() :type (simple-array fixnum (*)))
+  (cumulative #() :type (simple-array double-float (*)))
+  (total 0d0 :type double-float))
+
+(defun costmap-distribution (costmap)
+  (or (%distribution costmap)
+      (let* ((m (get-cost-map costmap))
+             (n (array-total-size m))
+             (count (loop for i below n count (> (row-major-aref m i) 0d0)))
+             (cells (make-array count :element-type 'fixnum))
+             (cumulative (make-array count :element-type 'double-float))
+             (sum 0d0) (k 0))
+        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k))
+        (dotimes (i n)
+          (let ((v (row-major-aref m i)))
+            (when (> v 0d0)
+              (incf sum v)
+              (setf (aref cells k) i (aref cumulative k) sum)
+              (incf k))))
+        (when (zerop count)
+          (error 'invalid-probability-distribution
+                 :costmap costmap
+                 :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
+                                 (mapcar #'first (cost-functions costmap)))))
+        (setf (%distribution costmap)
+              (make-distribution :cells cells :cumulative cumulative :total sum)))))
+
+(defun draw-cell (distribution random-state)
+  "A row-major cell index drawn with probability proportional to its value."
+  (let* ((cumulative (dist-cumulative distribution))
+         (r (random (dist-total distribution) random-state))
+         (lo 0) (hi (1- (length cumulative))))
+    (declare (type fixnum lo hi) (type double-float r))
+    (loop while (< lo hi)
+          do (let ((mid (ash (+ lo hi) -1)))
+               (if (> (aref cumulative mid) r) (setf hi mid) (setf lo (1+ mid)))))
+    (aref (dist-cells distribution) lo)))
+
+(defun generate-heights (costmap x y)
+  "The heights of the samples at (X Y): those of the first height generator, else (0)."
+  (let ((g (first (height-generators costmap))))
+    (if g
+        (let ((zs (funcall g x y)))
+          (unless (and (listp zs) zs (every #'realp zs))
+            (error "The height generator ~s of ~s gave ~s at (~,3f ~,3f), expected a non-empty ~
+                    list of reals." g costmap zs x y))
+          zs)
+        (list 0d0))))
+
+(defun generate-orientations (costmap x y)
+  "The orientations of the samples at (X Y): each orientation generator transforms the list of
+the previous one, starting from the identity."
+  (let ((orientations (list (cl-transforms:make-identity-rotation))))
+    (dolist (g (orientation-generators costmap) orientations)
+      (setf orientations (funcall g x y orientations))
+      (unless (and (listp orientations) orientations
+                   (every (lambda (q) (typep q 'cl-transforms:quaternion)) orientations))
+        (error "The orientation generator ~s of ~s gave ~s at (~,3f ~,3f), expected a ~
+                non-empty list of quaternions." g costmap orientations x y)))))
+
+(defparameter *redraw-limit* 16
+  "How often a cell that was already sampled is redrawn before it may be used again.")
+
+(defun costmap-samples (costmap &key (frame-id "map") (jitter t))
+  "The infinite lazy list of pose-stamped samples of COSTMAP in FRAME-ID: positions drawn with
+probability proportional to the cell values (a cell already used is redrawn, up to
+*REDRAW-LIMIT* times), uniformly placed inside the cell when JITTER, one pose per height and
+orientation of the generators.  The random numbers come from the costmap's own random state,
+which MAKE-LOCATION-COSTMAP seeded from *COSTMAP-RANDOM-STATE*."
+  (let ((distribution (costmap-distribution costmap))
+        (random-state (costmap-random-state costmap))
+        (used (make-hash-table))
+        (pending '())
+        (cols (costmap-columns costmap))
+        (res (resolution costmap)))
+    (cut:make-lazy-list
+     (lambda ()
+       (loop
+         (when pending (return (values (pop pending) t)))
+         (let ((cell (draw-cell distribution random-state)))
+           (loop repeat *redraw-limit* while (gethash cell used)
+                 do (setf cell (draw-cell distribution random-state)))
+           (setf (gethash cell used) t)
+           (multiple-value-bind (row col) (floor cell cols)
+             (let* ((x (+ (cell-center-x costmap col)
+                          (if jitter (* res (- (random 1d0 random-state) 0.5d0)) 0d0)))
+                    (y (+ (cell-center-y costmap row)
+                          (if jitter (* res (- (random 1d0 random-state) 0.5d0)) 0d0)))
+                    (zs (generate-heights costmap x y))
+                    (orientations (generate-orientations costmap x y)))
+               (setf pending
+                     (loop for z in zs
+                           append (loop for q in orientations
+                                        collect (cl-transforms-stamped:make-pose-stamped
+                                                 frame-id 0d0
+                                                 (cl-transforms:make-3d-vector x y z) q)))))))))))

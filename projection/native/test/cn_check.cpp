@@ -1,0 +1,129 @@
+// Self-test of libcram_native, run under AddressSanitizer/UBSan by `make check`.
+#include "cram_native.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+static int failures = 0, checks = 0;
+#define CHECK(c)                                                          \
+  do {                                                                    \
+    ++checks;                                                             \
+    if (!(c)) {                                                           \
+      ++failures;                                                         \
+      fprintf(stderr, "FAIL %s:%d: %s (last error: %s)\n", __FILE__, __LINE__, #c, \
+              cn_last_error());                                           \
+    }                                                                     \
+  } while (0)
+
+static const char *ARM =
+    "<robot name='arm'><link name='base'><collision><geometry><box size='0.2 0.2 0.1'/></geometry></collision></link>"
+    "<link name='upper'><collision><origin xyz='0 0 0.25'/><geometry><cylinder radius='0.05' length='0.5'/></geometry></collision></link>"
+    "<link name='tool'/>"
+    "<joint name='j1' type='revolute'><parent link='base'/><child link='upper'/><origin xyz='0 0 0.05'/><axis xyz='0 0 1'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "<joint name='j2' type='revolute'><parent link='upper'/><child link='tool'/><origin xyz='0 0 0.5'/><axis xyz='0 1 0'/><limit lower='-2' upper='2' effort='1' velocity='1'/></joint>"
+    "</robot>";
+
+int main() {
+  const double id[7] = {0, 0, 0, 0, 0, 0, 1};
+  double out[64];
+  int w = cn_world_create(0, 0, -9.81);
+  CHECK(w >= 0);
+  CHECK(cn_body_add_plane(w, 0, 0, 1, 0) == 0);
+  double p0[7] = {0, 0, 2, 0, 0, 0, 1};
+  int box = cn_body_add_box(w, p0, 0.2, 0.2, 0.2, 1);
+  CHECK(box == 1);
+  CHECK(cn_world_simulate(w, 3, 1.0 / 240) == 720);
+  CHECK(cn_object_get_pose(w, box, out) == 0 && std::fabs(out[2] - 0.1) < 2e-3);
+
+  // validation
+  double bad[7] = {0, 0, NAN, 0, 0, 0, 1};
+  CHECK(cn_object_set_pose(w, box, bad) == CN_E_ARG && strstr(cn_last_error(), "NaN in component 2"));
+  CHECK(cn_object_set_pose(w, 77, p0) == CN_E_HANDLE && strstr(cn_last_error(), "77"));
+  CHECK(cn_object_set_pose(w, box, nullptr) == CN_E_ARG);
+  CHECK(cn_body_add_sphere(w, p0, -1, 1) == CN_E_ARG);
+  CHECK(cn_world_step(12345, 0.01) == CN_E_HANDLE && strstr(cn_last_error(), "12345"));
+  CHECK(cn_body_add_mesh(w, id, "/nonexistent/x.stl", 1, 1, 1, 0) == CN_E_FILE &&
+        strstr(cn_last_error(), "/nonexistent/x.stl"));
+  CHECK(cn_robot_add_urdf(w, "<robot", id, 0) == CN_E_PARSE);
+  CHECK(cn_robot_add_urdf(w, nullptr, id, 0) == CN_E_ARG);
+
+  // articulated object, joints, FK
+  int r = cn_robot_add_urdf(w, ARM, id, 0);
+  CHECK(r >= 0);
+  CHECK(cn_robot_num_links(w, r) == 3 && cn_robot_num_joints(w, r) == 2);
+  CHECK(cn_robot_link_index(w, r, "foo") == CN_E_NAME && strstr(cn_last_error(), "unknown link 'foo'"));
+  int js[2] = {0, 1};
+  double qs[2] = {M_PI / 2, 0};
+  CHECK(cn_robot_set_joints(w, r, js, qs, 2) == 0);
+  CHECK(cn_robot_link_poses(w, r, out, 3) == 3);
+  CHECK(std::fabs(out[7 * 2 + 2] - 0.55) < 1e-9);
+  int bad_j[1] = {9};
+  CHECK(cn_robot_set_joints(w, r, bad_j, qs, 1) == CN_E_HANDLE);
+
+  // copy, contacts, rays, attachments
+  int c = cn_world_copy(w);
+  CHECK(c >= 0 && cn_world_num_objects(c) == cn_world_num_objects(w));
+  double far_pose[7] = {5, 5, 5, 0, 0, 0, 1};
+  CHECK(cn_object_set_pose(c, box, far_pose) == 0);
+  CHECK(cn_object_get_pose(w, box, out) == 0 && std::fabs(out[2] - 0.1) < 2e-3);
+  int pairs[64];
+  double dist[16];
+  CHECK(cn_world_contacts(w, 1e-3, pairs, dist, 16) >= 1);
+  CHECK(cn_object_contacts(w, box, 1e-3, pairs, dist, 16) >= 1);
+  double from[3] = {0.5, 0.5, 3}, to[3] = {0.5, 0.5, -1};
+  int hit[2];
+  CHECK(cn_ray_test(w, from, to, 1, hit, out) == 1 && hit[0] == 0);
+  double sp[7] = {0, 0, 0.8, 0, 0, 0, 1};
+  int s = cn_body_add_sphere(w, sp, 0.05, 1);
+  CHECK(cn_attach(w, s, r, 2, 0) == 0);
+  qs[0] = 0;
+  CHECK(cn_robot_set_joints(w, r, js, qs, 2) == 0);
+  CHECK(cn_attachments(w, pairs, 4) == 1);
+  CHECK(cn_detach(w, s, -1) == 1);
+  CHECK(cn_object_remove(w, s) == 0);
+  CHECK(cn_object_get_pose(w, s, out) == CN_E_HANDLE);
+
+  // rendering and visibility
+  double eye[3] = {-2, 0, 0.3}, target[3] = {0, 0, 0.3}, up[3] = {0, 0, 1}, cam[7];
+  CHECK(cn_look_at(eye, target, up, CN_CAMERA_OPTICAL, cam) == 0);
+  std::vector<unsigned char> rgb(64 * 48 * 3);
+  std::vector<double> depth(64 * 48);
+  std::vector<int> seg(64 * 48 * 2);
+  CHECK(cn_render(w, cam, CN_CAMERA_OPTICAL, 50, 64, 48, 0.05, 20, rgb.data(), depth.data(), seg.data()) == 0);
+  double frac;
+  int occ[8];
+  CHECK(cn_visibility(w, cam, CN_CAMERA_OPTICAL, 50, 64, 48, r, -1, &frac, occ, 8) >= 0 && frac > 0.5);
+  CHECK(cn_render(w, cam, 7, 50, 64, 48, 0.05, 20, rgb.data(), nullptr, nullptr) == CN_E_ARG);
+  CHECK(cn_write_png("/nonexistent-dir/x.png", rgb.data(), 64, 48) == CN_E_FILE);
+
+  // IK
+  int ch = cn_chain_create(w, r, "base", "tool");
+  CHECK(ch >= 0 && cn_chain_num_joints(ch) == 2);
+  double q[2] = {0.4, 0.3}, pose[7], sol[2], err[2], seed[2] = {0, 0};
+  CHECK(cn_chain_fk(ch, q, pose) == 0);
+  CHECK(cn_chain_ik(ch, pose, seed, 20, 1e-3, 1e-2, 7, sol, err) == 0 && err[0] < 1e-3);
+  CHECK(cn_chain_destroy(ch) == 0);
+  CHECK(cn_chain_fk(ch, q, pose) == CN_E_HANDLE);
+
+  // destroy; stale handles
+  CHECK(cn_world_destroy(c) == 0);
+  CHECK(cn_world_destroy(w) == 0);
+  CHECK(cn_world_destroy(w) == CN_E_HANDLE && strstr(cn_last_error(), "is not a live world"));
+  CHECK(cn_world_count() == 0);
+  for (int i = 0; i < 200; ++i) {  // create/copy/destroy cycles
+    int a = cn_world_create(0, 0, -9.81);
+    cn_body_add_box(a, p0, 0.1, 0.1, 0.1, 1);
+    cn_robot_add_urdf(a, ARM, id, 0);
+    int b = cn_world_copy(a);
+    cn_world_step(b, 0.01);
+    cn_world_destroy(b);
+    cn_world_destroy(a);
+  }
+  CHECK(cn_world_count() == 0);
+  printf("cn_check: %d checks, %d failures\n", checks, failures);
+  return failures ? 1 : 0;
+}

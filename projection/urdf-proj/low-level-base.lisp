@@ -1,0 +1,258 @@
+;;;; Low level of the simulated robot, base and head: DRIVE, MOVE-TORSO, LOOK-AT, DETECT, and
+;;;; the collision checks they use. Motions teleport the robot in the belief state.
+
+(in-package :cram-urdf-projection)
+
+;;; ---- collisions -----------------------------------------------------------------------------
+
+(defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
+                              ignore-links)
+  "The names of the objects the robot collides with: contacts of its links (except the links
+in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
+with anything but the robot and each other. The floor does not collide with robots."
+  (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
+         (hits '()))
+    (loop for (a la b lb) in (btr::contact-records world robot)
+          for other = (if (eq a robot) b a)
+          for link = (if (eq a robot) la lb)
+          unless (or (member (btr:name other) attached)
+                     (and link (member link ignore-links :test #'string=)))
+            do (pushnew (btr:name other) hits))
+    (dolist (name attached)
+      (let ((o (btr:object world name)))
+        (when o
+          (loop for (a nil b nil) in (btr::contact-records world o)
+                for other = (if (eq a o) b a)
+                unless (or (eq other robot) (member (btr:name other) attached))
+                  do (pushnew (btr:name other) hits)))))
+    (nreverse hits)))
+
+;;; ---- navigation ---------------------------------------------------------------------------------
+
+(defun drive (pose)
+  "Teleport the robot's base to POSE (a pose-stamped in any known frame, or a pose in the map).
+When the robot then collides with anything but the floor and its attached objects, it is put
+back and NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base as
+odom_x_joint / odom_y_joint / odom_z_joint entries."
+  (let* ((robot (robot-object))
+         (goal (pose-in-map pose "DRIVE goal"))
+         (before (btr:pose robot)))
+    (with-motion ("going")
+      (setf (btr:pose robot) goal)
+      (let ((hits (robot-collisions :robot robot)))
+        (when hits
+          (setf (btr:pose robot) before)
+          (cpl:fail 'common-fail:navigation-pose-unreachable
+                    :description (format nil "Pose ~a is unreachable: the robot would collide with ~{~s~^, ~}."
+                                         (pose-summary goal) hits))))
+      (let ((o (cl-transforms:origin goal)))
+        (append (mapcar (lambda (e) (list (car e) (cdr e))) (btr:joint-states robot))
+                (list (list "odom_x_joint" (cl-transforms:x o))
+                      (list "odom_y_joint" (cl-transforms:y o))
+                      (list "odom_z_joint" (cl-transforms:get-yaw (cl-transforms:orientation goal)))))))))
+
+(defun pose-summary (pose)
+  "A short text of POSE's position and yaw."
+  (let ((o (cl-transforms:origin pose)))
+    (format nil "(~,3f ~,3f ~,3f yaw ~,3f)" (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
+            (cl-transforms:get-yaw (cl-transforms:orientation pose)))))
+
+;;; ---- torso ------------------------------------------------------------------------------------
+
+(defun move-torso (joint-angle)
+  "Set the torso joint to JOINT-ANGLE (a real, or :UPPER-LIMIT, :LOWER-LIMIT, :MIDDLE) clamped
+to its limits. A numeric request outside the limits moves to the clamped value and then signals
+TORSO-GOAL-NOT-REACHED. Returns the value set."
+  (let ((robot (robot-object))
+        (joint (torso-joint)))
+    (unless (or (realp joint-angle) (member joint-angle '(:upper-limit :lower-limit :middle)))
+      (projection-error "MOVE-TORSO: joint angle ~s, expected a real or one of :UPPER-LIMIT, ~
+                         :LOWER-LIMIT, :MIDDLE." joint-angle))
+    (when (and (realp joint-angle) (not (< (abs joint-angle) 1d6)))
+      (projection-error "MOVE-TORSO: joint angle ~s is not a finite value." joint-angle))
+    (with-motion ("moving-torso")
+      (unless (movable-joint-p robot joint)
+        (cpl:fail 'common-fail:torso-goal-not-reached
+                  :description (format nil "Robot ~s has no movable torso joint (~s)."
+                                       (robot-name) joint)))
+      (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
+        (let* ((wanted (case joint-angle
+                         (:upper-limit hi)
+                         (:lower-limit lo)
+                         (:middle (/ (+ lo hi) 2))
+                         (t joint-angle)))
+               (value (max lo (min hi wanted))))
+          (btr:set-robot-state-from-joints (list (list joint value)) robot)
+          (when (> (abs (- value wanted)) 1d-9)
+            (cpl:fail 'common-fail:torso-goal-not-reached
+                      :description (format nil "Torso goal ~a is outside the limits [~a, ~a] of ~a; ~
+                                                moved to ~a." wanted lo hi joint value)))
+          value)))))
+
+;;; ---- neck --------------------------------------------------------------------------------------
+
+(defun v-rotate (quaternion vector)
+  (cl-transforms:rotate quaternion vector))
+
+(defun joint-axis-and-origin (robot joint)
+  "The map direction of JOINT's axis and the map position of its frame (the child link's)."
+  (let* ((j (or (gethash joint (cl-urdf:joints (btr:urdf robot)))
+                (projection-error "Joint ~s is not a joint of ~s." joint (btr:name robot))))
+         (pose (btr:link-pose robot (cl-urdf:name (cl-urdf:child j))))
+         (axis (apply #'cl-transforms:make-3d-vector (cl-urdf:axis j))))
+    (values (cl-transforms:normalize-vector (v-rotate (cl-transforms:orientation pose) axis))
+            (cl-transforms:origin pose))))
+
+(defun plane-projection (v axis)
+  (cl-transforms:v- v (cl-transforms:v* axis (cl-transforms:dot-product v axis))))
+
+(defun signed-angle (from to axis)
+  "The angle about AXIS that turns FROM onto TO, both projected on the plane normal to AXIS."
+  (let ((f (plane-projection from axis)) (v (plane-projection to axis)))
+    (if (or (< (cl-transforms:v-norm f) 1d-9) (< (cl-transforms:v-norm v) 1d-9))
+        0d0
+        (atan (cl-transforms:dot-product axis (cl-transforms:cross-product f v))
+              (cl-transforms:dot-product f v)))))
+
+(defun normalize-angle (a)
+  (atan (sin a) (cos a)))
+
+(defun neck-angles-towards (robot joints camera target)
+  "Joint values of the neck JOINTS that point the optical axis (z) of the CAMERA frame at the
+map point TARGET, computed from the URDF joint axes and the link poses by turning each joint in
+turn (exact for pan-tilt heads, also for cameras off the joint axes). The joints are left at
+the computed values (possibly outside their limits)."
+  (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0d0)) joints) robot)
+  (let ((values (mapcar (lambda (j) (declare (ignore j)) 0d0) joints)))
+    (loop repeat 30
+          for largest = 0d0
+          do (loop for j in joints for i from 0
+                   do (multiple-value-bind (axis) (joint-axis-and-origin robot j)
+                        (let* ((cam (btr:link-pose robot camera))
+                               (forward (v-rotate (cl-transforms:orientation cam)
+                                                  (cl-transforms:make-3d-vector 0 0 1)))
+                               (to (cl-transforms:v- target (cl-transforms:origin cam)))
+                               (delta (signed-angle forward to axis)))
+                          (setf largest (max largest (abs delta)))
+                          (setf (nth i values) (normalize-angle (+ (nth i values) delta)))
+                          (btr:set-robot-state-from-joints (list (list j (nth i values))) robot))))
+          until (< largest 1d-9))
+    values))
+
+(defun apply-neck-joint-states (robot pairs)
+  "Set the neck joints of PAIRS ((joint value)...) clamped to their limits; signals
+PTU-GOAL-NOT-REACHED after moving when a value had to be clamped by more than 1e-5."
+  (let* ((clamped (mapcar (lambda (p)
+                            (destructuring-bind (j v) p
+                              (unless (and (stringp j) (realp v) (< (abs v) 1d6))
+                                (projection-error "Neck joint state ~s: expected (joint-name value)." p))
+                              (list j (clamp-joint robot j v))))
+                          pairs))
+         (off (loop for (j v) in pairs for (nil c) in clamped
+                    when (> (abs (- v c)) 1d-5) collect (list j v c))))
+    (btr:set-robot-state-from-joints clamped robot)
+    (when off
+      (cpl:fail 'common-fail:ptu-goal-not-reached
+                :description (format nil "Wanted to twist the neck beyond its limits: ~
+                                          ~{~{~a wanted ~,4f, limited to ~,4f~}~^; ~}." off)))
+    (mapcar #'second clamped)))
+
+(defun look-at (target &optional configuration)
+  "Point the robot's camera at TARGET: a pose-stamped (any known frame), a pose in the map, a
+frame name, or a list of neck joint states ((joint value)...); or with TARGET NIL at the named
+neck CONFIGURATION (e.g. :FORWARD). Neck angles are clamped to the joint limits;
+PTU-GOAL-NOT-REACHED follows a clamped request. Returns the neck joint values."
+  (let* ((robot (robot-object))
+         (joints (neck-joints)))
+    (unless joints
+      (projection-error "Robot ~s has no ROBOT-NECK-JOINTS fact: it cannot look anywhere." (robot-name)))
+    (with-motion ("looking")
+      (cond ((and (null target) configuration)
+             (apply-neck-joint-states robot (named-joint-states :neck nil configuration)))
+            ((and (consp target) (every #'consp target) (every (lambda (e) (stringp (first e))) target))
+             (apply-neck-joint-states robot (mapcar (lambda (e) (list (first e) (if (consp (cdr e)) (second e) (cdr e))))
+                                                    target)))
+            ((or (stringp target) (typep target 'cl-transforms-stamped:pose-stamped)
+                 (cl-transforms:pose-p target) (consp target))
+             (let* ((map-pose (if (stringp target) (frame-pose-in-map target)
+                                  (pose-in-map target "LOOK-AT target")))
+                    (values (neck-angles-towards robot joints (camera-frame robot)
+                                                 (cl-transforms:origin map-pose))))
+               (apply-neck-joint-states robot (mapcar #'list joints values))))
+            (t (projection-error "LOOK-AT: target ~s, expected a pose-stamped, a pose, a frame ~
+                                  name or neck joint states, or NIL and a configuration name."
+                                 target))))))
+
+(defun look-at-pose-stamped (pose)
+  "LOOK-AT the pose-stamped POSE (the name the older tutorials use)."
+  (look-at pose))
+
+;;; ---- perception ---------------------------------------------------------------------------------
+
+(defun name-matches-p (wanted actual)
+  (or (null wanted) (string-equal (string wanted) (string actual))))
+
+(defun type-matches-p (wanted object)
+  (or (null wanted) (string-equal (string wanted) "KITCHEN-OBJECT")
+      (some (lambda (type) (string-equal (string wanted) (string type))) (btr:item-types object))))
+
+(defun rosify (name)
+  (substitute #\_ #\- (string-downcase (string name))))
+
+(defun perceived-designator (input object camera-check-frame)
+  "A copy of the object designator INPUT describing the item OBJECT as perceived: (type t)
+(name n) and a (pose ((:pose base-pose) (:transform ...) (:pose-in-map ...) (:transform-in-map
+...))) entry; its data is an OBJECT-DESIGNATOR-DATA with the name and the map pose."
+  (declare (ignore camera-check-frame))
+  (let* ((name (btr:name object))
+         (frame (rosify name))
+         (map-pose (btr:pose object))
+         (base (robot-base-frame))
+         (in-base (pose-in-frame map-pose base))
+         (in-map (cl-transforms-stamped:make-pose-stamped cram-tf:*fixed-frame* (cram-tf-stamp)
+                                                          (cl-transforms:origin map-pose)
+                                                          (cl-transforms:orientation map-pose))))
+    (desig:make-effective-designator
+     input
+     :new-properties `((:type ,(btr:item-type object))
+                       (:name ,name)
+                       (:pose ((:pose ,in-base)
+                               (:transform ,(cram-tf:pose-stamped->transform-stamped in-base frame))
+                               (:pose-in-map ,in-map)
+                               (:transform-in-map ,(cram-tf:pose-stamped->transform-stamped in-map frame)))))
+     :data-object (make-instance 'desig:object-designator-data :object-identifier name :pose in-map))))
+
+(defun detect (object-designator)
+  "Find the items matching OBJECT-DESIGNATOR's :NAME and :TYPE that are visible from the
+robot's camera (BTR:*VISIBILITY-THRESHOLD* of their pixels unoccluded). Returns the perceived
+designator of the first (quantifier :A / :AN) or a list of all (:ALL); signals
+PERCEPTION-OBJECT-NOT-FOUND naming the designator when there is none."
+  (unless (typep object-designator 'desig:object-designator)
+    (projection-error "DETECT: expected an object designator, got ~s." object-designator))
+  (with-motion ("detecting")
+    (let* ((robot (robot-object))
+           (world btr:*current-bullet-world*)
+           (camera (btr:link-pose robot (camera-frame robot)))
+           (wanted-name (desig:desig-prop-value object-designator :name))
+           (wanted-type (desig:desig-prop-value object-designator :type))
+           (hits (loop for o in (btr:objects world)
+                       when (and (typep o 'btr:item)
+                                 (name-matches-p wanted-name (btr:name o))
+                                 (type-matches-p wanted-type o)
+                                 (btr:object-visible-p world camera o))
+                         collect o)))
+      (unless hits
+        (cpl:fail 'common-fail:perception-object-not-found
+                  :object object-designator
+                  :description (format nil "Could not find any object of type ~s~@[ named ~s~] ~
+                                            in the field of view." wanted-type wanted-name)))
+      (let ((perceived (mapcar (lambda (o) (perceived-designator object-designator o nil)) hits)))
+        (if (eq (desig:quantifier object-designator) :all) perceived (first perceived))))))
+
+(defun get-object-pose-in-base (object-designator)
+  "The pose-stamped in the robot's base frame of a perceived OBJECT-DESIGNATOR."
+  (second (assoc :pose (desig:desig-prop-value object-designator :pose))))
+
+(defun get-object-pose-in-map (object-designator)
+  "The pose-stamped in the map of a perceived OBJECT-DESIGNATOR."
+  (second (assoc :pose-in-map (desig:desig-prop-value object-designator :pose))))

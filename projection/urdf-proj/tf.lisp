@@ -1,0 +1,117 @@
+;;;; TF of the simulated robot: the transformer of the projection environment is fed from the
+;;;; belief state (map → odom → robot root → every link; map → each environment's links).
+;;;; Also the bookkeeping every motion does: TF update, snapshot, ROBOT-STATE-CHANGED.
+
+(in-package :cram-urdf-projection)
+
+(defvar *tf-from-belief-state* nil
+  "True inside the projection environment: motions then update CRAM-TF:*TRANSFORMER* from the
+belief state after they ran.")
+
+(defvar *environment-tf-signatures* nil
+  "Hash table object name → joint and pose signature last written to TF, for the environment
+objects (unchanged ones are not written again). Bound per projection environment.")
+
+(defvar *tree-cache* (make-hash-table :test 'eq :weakness :key)
+  "CL-URDF:ROBOT → vector of (parent-link-index . child-link-index) for every joint.")
+
+(defun link-tree (robot)
+  "The (parent-index . child-index) pairs of every joint of ROBOT's URDF, link indices as in
+BTR:LINK-NAMES."
+  (let ((model (btr:urdf robot)))
+    (or (gethash model *tree-cache*)
+        (setf (gethash model *tree-cache*)
+              (let ((index (make-hash-table :test 'equal)))
+                (loop for n in (btr:link-names robot) for i from 0 do (setf (gethash n index) i))
+                (coerce (loop for j being the hash-values of (cl-urdf:joints model)
+                              for p = (gethash (cl-urdf:name (cl-urdf:parent j)) index)
+                              for c = (gethash (cl-urdf:name (cl-urdf:child j)) index)
+                              when (and p c) collect (cons p c))
+                        'simple-vector))))))
+
+(defun link-poses-vector (robot)
+  "All link poses of ROBOT as one double vector, 7 per link in BTR:LINK-NAMES order."
+  (cram-native:robot-link-poses (btr:world-handle (btr:world robot)) (btr::object-handle robot)))
+
+(defun vector-transform (v i)
+  "The CL-TRANSFORMS:TRANSFORM of pose number I of the pose vector V."
+  (let ((o (* 7 i)))
+    (cl-transforms:make-transform
+     (cl-transforms:make-3d-vector (aref v o) (aref v (+ o 1)) (aref v (+ o 2)))
+     (cl-transforms:make-quaternion (aref v (+ o 3)) (aref v (+ o 4)) (aref v (+ o 5)) (aref v (+ o 6))))))
+
+(defun set-tf (transformer parent child transform stamp &optional static)
+  (cl-transforms-stamped:set-transform
+   transformer
+   (cl-transforms-stamped:make-transform-stamped parent child stamp
+                                                 (cl-transforms:translation transform)
+                                                 (cl-transforms:rotation transform))
+   :static static))
+
+(defun publish-object-links (transformer object parent-frame stamp &key skip)
+  "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
+with the map) and every link under its parent link. Links named in the hash table SKIP are left out. Returns the names written."
+  (let* ((names (coerce (btr:link-names object) 'simple-vector))
+         (poses (link-poses-vector object))
+         (root (cl-urdf:name (cl-urdf:root-link (btr:urdf object))))
+         (root-i (position root names :test #'string=))
+         (written '()))
+    (unless (and skip (gethash root skip))
+      (set-tf transformer parent-frame root (vector-transform poses root-i) stamp)
+      (push root written))
+    (loop for (p . c) across (link-tree object)
+          for child = (svref names c)
+          unless (and skip (gethash child skip))
+            do (set-tf transformer (svref names p) child
+                       (cl-transforms:transform* (cl-transforms:transform-inv (vector-transform poses p))
+                                                 (vector-transform poses c))
+                       stamp)
+               (push child written))
+    written))
+
+(defun environment-signature (object)
+  (concatenate 'vector
+               (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr::object-handle object))
+               (btr::pose->vector (btr:pose object))))
+
+(defun update-tf-from-belief-state (&key (transformer cram-tf:*transformer*)
+                                         (world btr:*current-bullet-world*) force)
+  "Write the robot of WORLD into TRANSFORMER: map → odom frame (identity) → the robot's root
+link → each link, and the links of the other articulated objects (the environment) under map,
+those whose state changed since the last call (all with FORCE). Returns TRANSFORMER."
+  (let* ((robot (robot-object world))
+         (stamp (cram-tf-stamp))
+         (odom (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
+         (root (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))
+         (parent (if (and odom (not (string= odom root)) (not (btr:link-exists-p robot odom)))
+                     (progn (set-tf transformer cram-tf:*fixed-frame* odom
+                                    (cl-transforms:make-identity-transform) stamp)
+                            odom)
+                     cram-tf:*fixed-frame*))
+         (robot-frames (make-hash-table :test 'equal)))
+    (dolist (l (publish-object-links transformer robot parent stamp))
+      (setf (gethash l robot-frames) t))
+    (let ((signatures (or *environment-tf-signatures* (make-hash-table :test 'eq))))
+      (dolist (o (btr:objects world))
+        (when (and (typep o 'btr:robot-object) (not (eq o robot)))
+          (let ((signature (environment-signature o)))
+            (when (or force (not (equalp signature (gethash (btr:name o) signatures))))
+              (publish-object-links transformer o cram-tf:*fixed-frame* stamp :skip robot-frames)
+              (setf (gethash (btr:name o) signatures) signature))))))
+    transformer))
+
+;;; ---- bookkeeping of every motion ------------------------------------------------------------
+
+(defun after-motion (label)
+  "Run after each motion (also a failed one): TF update inside the projection environment,
+a snapshot labelled LABEL, and the ROBOT-STATE-CHANGED event."
+  (when *tf-from-belief-state*
+    (update-tf-from-belief-state))
+  (btr:snapshot label)
+  (coe:on-event (make-instance 'cpoe:robot-state-changed)))
+
+(defmacro with-motion ((label) &body body)
+  "Run BODY as the motion LABEL (a string): AFTER-MOTION runs when BODY is left, normally or
+by a failure."
+  `(unwind-protect (progn ,@body)
+     (after-motion ,label)))

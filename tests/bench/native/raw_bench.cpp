@@ -1,0 +1,162 @@
+// The limit for the cram-native benchmark: the same operations written directly against
+// Bullet (double precision), with no handles, validation or foreign calls.
+// Prints "name seconds-per-operation" lines.
+#include <btBulletDynamicsCommon.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+using Clock = std::chrono::steady_clock;
+
+template <class F> static double per_call(F f, int n) {
+  for (int i = 0; i < n / 10 + 1; ++i) f(i);
+  auto t0 = Clock::now();
+  for (int i = 0; i < n; ++i) f(i);
+  return std::chrono::duration<double>(Clock::now() - t0).count() / n;
+}
+
+struct World {
+  btDefaultCollisionConfiguration *config;
+  btCollisionDispatcher *disp;
+  btDbvtBroadphase *bp;
+  btSequentialImpulseConstraintSolver *solver;
+  btDiscreteDynamicsWorld *dw;
+  World() {
+    btDefaultCollisionConstructionInfo ci;
+    ci.m_defaultMaxPersistentManifoldPoolSize = 256;
+    ci.m_defaultMaxCollisionAlgorithmPoolSize = 256;
+    config = new btDefaultCollisionConfiguration(ci);
+    disp = new btCollisionDispatcher(config);
+    bp = new btDbvtBroadphase();
+    solver = new btSequentialImpulseConstraintSolver();
+    dw = new btDiscreteDynamicsWorld(disp, bp, solver, config);
+    dw->setGravity(btVector3(0, 0, -9.81));
+  }
+  ~World() {
+    for (int i = dw->getNumCollisionObjects() - 1; i >= 0; --i) {
+      auto *o = dw->getCollisionObjectArray()[i];
+      dw->removeCollisionObject(o);
+      delete o;
+    }
+    delete dw; delete solver; delete bp; delete disp; delete config;
+  }
+  btRigidBody *add(btCollisionShape *s, double mass, const btTransform &t, int group, int mask,
+                   bool kinematic = false) {
+    btVector3 in(0, 0, 0);
+    if (mass > 0) s->calculateLocalInertia(mass, in);
+    btRigidBody::btRigidBodyConstructionInfo ci(mass, nullptr, s, in);
+    ci.m_startWorldTransform = t;
+    auto *rb = new btRigidBody(ci);
+    if (kinematic) {
+      rb->setCollisionFlags(rb->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+      rb->setActivationState(DISABLE_DEACTIVATION);
+    }
+    dw->addRigidBody(rb, group, mask);
+    return rb;
+  }
+};
+
+static void teleport(World &w, btRigidBody *rb, const btTransform &t) {
+  rb->setWorldTransform(t);
+  rb->setInterpolationWorldTransform(t);
+  if (!rb->isStaticOrKinematicObject()) rb->activate(true);
+  w.dw->updateSingleAabb(rb);
+}
+
+// a chain robot: NJ revolute joints (alternating z / y axes), one box link body per joint
+struct Robot {
+  std::vector<btTransform> origin, pose;
+  std::vector<btVector3> axis;
+  std::vector<btRigidBody *> bodies;
+  std::vector<double> q;
+};
+static const int NJ = 45;
+
+static void fk(World &w, Robot &r, double *out) {
+  btTransform t = btTransform::getIdentity();
+  for (int j = 0; j < NJ; ++j) {
+    t = t * r.origin[j];
+    t.setBasis(t.getBasis() * btMatrix3x3(btQuaternion(r.axis[j], r.q[j])));
+    r.pose[j] = t;
+    teleport(w, r.bodies[j], t);
+  }
+  for (int j = 0; j < NJ; ++j) {
+    btQuaternion qq = r.pose[j].getRotation();
+    const btVector3 &p = r.pose[j].getOrigin();
+    double *o = out + 7 * j;
+    o[0] = p.x(); o[1] = p.y(); o[2] = p.z(); o[3] = qq.x(); o[4] = qq.y(); o[5] = qq.z(); o[6] = qq.w();
+  }
+}
+
+struct Count : btCollisionWorld::ContactResultCallback {
+  int n = 0;
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *, int, int,
+                           const btCollisionObjectWrapper *, int, int) override {
+    if (cp.getDistance() <= 0) ++n;
+    return 0;
+  }
+};
+
+int main() {
+  btBoxShape link_shape(btVector3(0.02, 0.02, 0.04));
+  btBoxShape small(btVector3(0.05, 0.05, 0.05));
+  btStaticPlaneShape plane(btVector3(0, 0, 1), 0);
+  World w;
+  w.add(&plane, 0, btTransform::getIdentity(), 2, -1 ^ 2);
+  std::vector<btRigidBody *> objs;
+  for (int i = 0; i < 33; ++i)
+    objs.push_back(w.add(&small, 1, btTransform(btQuaternion::getIdentity(),
+                                                btVector3(1 + (i % 6) * 0.3, (i / 6) * 0.3 - 0.8, 0.05 + 0.12 * (i % 3))),
+                         1, -1));
+  Robot r;
+  for (int j = 0; j < NJ; ++j) {
+    r.origin.push_back(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, j == 0 ? 0.05 : 0.08)));
+    r.axis.push_back(j % 2 ? btVector3(0, 1, 0) : btVector3(0, 0, 1));
+    r.pose.push_back(btTransform::getIdentity());
+    r.q.push_back(0);
+    r.bodies.push_back(w.add(&link_shape, 0, btTransform::getIdentity(), 32, -1, true));
+  }
+  std::vector<double> out(7 * NJ);
+  double t_tel = per_call([&](int i) {
+    teleport(w, objs[5], btTransform(btQuaternion::getIdentity(), btVector3(1 + 1e-6 * (i % 100), 0, 1)));
+  }, 200000);
+  teleport(w, objs[5], btTransform(btQuaternion::getIdentity(), btVector3(1.6, -0.8, 0.05)));
+  double t_fk = per_call([&](int i) {
+    for (int j = 0; j < NJ; ++j) r.q[j] = 0.01 * ((i + j) % 20);
+    fk(w, r, out.data());
+  }, 20000);
+  double t_col = per_call([&](int) {
+    Count c;
+    for (auto *b : r.bodies) {
+      c.m_collisionFilterGroup = 32;
+      c.m_collisionFilterMask = -1;
+      w.dw->contactTest(b, c);
+    }
+  }, 5000);
+  double t_copy = per_call([&](int) {
+    World c;
+    auto &arr = w.dw->getCollisionObjectArray();
+    for (int i = 0; i < arr.size(); ++i) {
+      auto *s = btRigidBody::upcast(arr[i]);
+      auto *rb = c.add(s->getCollisionShape(), s->getInvMass() > 0 ? 1 / s->getInvMass() : 0,
+                       s->getWorldTransform(), s->getBroadphaseHandle()->m_collisionFilterGroup,
+                       s->getBroadphaseHandle()->m_collisionFilterMask);
+      rb->setCollisionFlags(s->getCollisionFlags());
+      rb->setLinearVelocity(s->getLinearVelocity());
+      rb->setAngularVelocity(s->getAngularVelocity());
+    }
+  }, 500);
+  double t_sim = per_call([&](int) {
+    World c;
+    c.add(&plane, 0, btTransform::getIdentity(), 2, -1 ^ 2);
+    for (int i = 0; i < 33; ++i)
+      c.add(&small, 1, btTransform(btQuaternion::getIdentity(), btVector3((i % 6) * 0.3, (i / 6) * 0.3, 0.3 + 0.12 * (i % 3))), 1, -1);
+    for (int s = 0; s < 240; ++s) c.dw->stepSimulation(1.0 / 240, 0, 1.0 / 240);
+  }, 5);
+  printf("teleport %.9g\njoints-and-poses %.9g\nrobot-collision %.9g\ncopy %.9g\nsimulate %.9g\n",
+         t_tel, t_fk, t_col, t_copy, t_sim);
+  return 0;
+}
