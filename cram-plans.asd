@@ -97,11 +97,18 @@
 
 (defsystem "cram-location-costmap"
   :description "Location costmaps and their metadata predicates (package COSTMAP)."
-  :depends-on ("cram-prolog" "cram-utilities" "cram-robot-interfaces")
+  :depends-on ("cram-prolog" "cram-utilities" "cram-robot-interfaces" "cram-designators"
+               "cl-transforms" "cram-native" "cram-bullet-reasoning")
   :pathname "designators/"
   :serial t
   :components ((:file "costmap-package")
-               (:file "costmap-metadata")))
+               (:file "costmap-metadata")
+               (:file "costmap-grid")
+               (:file "costmap-functions")
+               (:file "costmap-belief")
+               (:file "costmap-targets")
+               (:file "costmap-designators")
+               (:file "costmap-heatmap")))
 
 (defsystem "cram-pr2-description"
   :description "The PR2 as robot-description facts keyed by :PR2 (package PR2-DESCR)."
@@ -152,6 +159,34 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                (:file "facts")
                (:file "utils")))
 
+(defsystem "cram-common-designators"
+  :description "MOTION-GROUNDING rules of the robot-independent motions and WAIT-PM (COMMON-DESIG)."
+  :depends-on ("cram-prolog" "cram-utilities" "cram-designators" "cram-executive"
+               "cram-language" "cl-transforms")
+  :pathname "projection/urdf-proj/"
+  :serial t
+  :components ((:file "motions-package")
+               (:file "motions")))
+
+(defsystem "cram-urdf-projection"
+  :description "The simulated robot: motions teleport the robot of the Bullet belief state, with
+IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
+  :depends-on ("cram-bullet-reasoning" "cram-native" "cram-common-designators" "cram-executive"
+               "cram-language" "cram-common-failures" "cram-robot-interfaces" "cram-designators"
+               "cl-transforms" "cram-prolog" "cram-utilities")
+  :pathname "projection/urdf-proj/"
+  :serial t
+  :components ((:file "package")
+               (:file "robot")
+               (:file "tf")
+               (:file "low-level-base")
+               (:file "ik")
+               (:file "ik-solver")
+               (:file "low-level-arms")
+               (:file "low-level-tcp")
+               (:file "process-modules")
+               (:file "projection-environment")))
+
 (defsystem "cram-plans"
   :description "CRAM plans with a Bullet belief state for projection: all layers."
   :version "0.1.0"
@@ -159,7 +194,33 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                "cram-language" "cram-common-failures"
                "cram-robot-interfaces" "cram-location-costmap"
                "cram-pr2-description" "cram-pepper-description"
-               "cram-designators" "cram-executive" "cram-bullet-reasoning"))
+               "cram-designators" "cram-executive" "cram-bullet-reasoning"
+               "cram-common-designators" "cram-urdf-projection"
+               "cram-object-knowledge" "cram-mobile-pick-place-plans"))
+
+(defsystem "roslisp-utilities/ros-home"
+  :description "Makes the ROS home directory before roslisp loads (roslisp hangs without it)."
+  :pathname "src/ros/"
+  :serial t
+  :components ((:file "package")
+               (:file "ros-home")))
+
+(defsystem "roslisp-utilities"
+  :description "ROS integration on Debian's roslisp: STARTUP-ROS with init and cleanup functions,
+URDFs from the parameter server, the belief state on /tf and /visualization_marker_array.
+Optional: not part of cram-plans (loading roslisp costs about 1.9 s)."
+  :depends-on ("roslisp-utilities/ros-home" "cram-bullet-reasoning" "cl-transforms"
+               "cram-robot-interfaces" "bordeaux-threads" "sb-posix"
+               "roslisp" "std_msgs-msg" "geometry_msgs-msg" "tf2_msgs-msg" "visualization_msgs-msg")
+  :pathname "src/ros/"
+  :serial t
+  :components ((:file "master")
+               (:file "names")
+               (:file "node")
+               (:file "description")
+               (:file "belief-tf")
+               (:file "belief-markers")
+               (:file "publisher")))
 
 ;;; Tests: one system per layer, all run by cram-plans-tests.
 
@@ -177,7 +238,8 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :depends-on ("cram-plans-tests/base" "cram-prolog")
   :pathname "tests/"
   :serial t
-  :components ())
+  :components ((:file "prolog-tests")
+               (:file "prolog-builtin-tests")))
 
 (defsystem "cram-plans-tests/transforms"
   :depends-on ("cram-plans-tests/base" "cl-transforms")
@@ -233,6 +295,25 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :pathname "tests/"
   :components ((:file "scripts-tests")))
 
+(defsystem "cram-plans-tests/ros"
+  :depends-on ("cram-plans-tests/base" "roslisp-utilities" "sb-posix")
+  :pathname "tests/"
+  :components ((:file "ros-tests")))
+
+(defsystem "cram-plans-tests/urdf-proj"
+  :depends-on ("cram-plans-tests/base" "cram-urdf-projection" "cram-pr2-description"
+               "cram-pepper-description")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "urdf-proj-tests")))
+
+(defsystem "cram-plans-tests/costmap"
+  :depends-on ("cram-plans-tests/base" "cram-location-costmap" "cram-pr2-description")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "costmap-tests")
+               (:file "costmap-kitchen-tests")))
+
 (defsystem "cram-plans-tests"
   :description "Every FiveAM suite of cram-plans, under the suite CRAM-PLANS-TESTS:ALL."
   :depends-on ("cram-plans-tests/utilities" "cram-plans-tests/prolog"
@@ -240,4 +321,28 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                "cram-plans-tests/language"
                "cram-plans-tests/robots"
                "cram-plans-tests/designators" "cram-plans-tests/executive"
-               "cram-plans-tests/btr" "cram-plans-tests/scripts"))
+               "cram-plans-tests/costmap"
+               "cram-plans-tests/btr" "cram-plans-tests/scripts"
+               "cram-plans-tests/ros" "cram-plans-tests/urdf-proj"))
+
+;;; Plans, object knowledge, tutorials and demos.
+
+(defsystem "cram-object-knowledge"
+  :description "Manipulation interfaces (MAN-INT) and household object knowledge (OBJECTS):
+grasps, gripper openings and efforts, pick and place trajectories."
+  :depends-on ("cl-transforms")
+  :pathname "src/plans/"
+  :serial t
+  :components ((:file "manipulation-interfaces")
+               (:file "object-knowledge")))
+
+(defsystem "cram-mobile-pick-place-plans"
+  :description "Action groundings and plans of mobile pick and place (PP-PLANS)."
+  :depends-on ("cram-prolog" "cram-utilities" "cl-transforms" "cram-designators"
+               "cram-language" "cram-common-failures" "cram-executive"
+               "cram-robot-interfaces" "cram-bullet-reasoning" "cram-object-knowledge")
+  :pathname "src/plans/"
+  :serial t
+  :components ((:file "pp-package")
+               (:file "atomic-actions")
+               (:file "pick-place")))

@@ -63,7 +63,7 @@ metadata.  Grids are cached per environment pose and joint state."
                          (coerce padding 'double-float)))
          (environments (static-obstacles world))
          (key (list* width height origin-x origin-y resolution padding z-min z-max
-                     (mapcar (lambda (e) (list (btr:name e) (vector-key (btr:pose e))
+                     (mapcar (lambda (e) (list (btr:name e) (btr:urdf e) (vector-key (btr:pose e))
                                                (mapcar #'cdr (btr:joint-states e))))
                              environments)))
          (cached (assoc key *occupancy-cache* :test #'equalp)))
@@ -93,68 +93,100 @@ metadata.  Grids are cached per environment pose and joint state."
   "Cast rays from the flat double vectors FROM to TO (3 per ray) in WORLD; the list of hits."
   (cram-native:ray-test (btr:world-handle world) from to))
 
-(defun hit-clear-p (hit target-handle)
-  "True when a ray HIT (as from CRAM-NATIVE:RAY-TEST) means the target is in sight: nothing hit,
-or the first thing hit is the target object."
-  (or (null hit) (and target-handle (= (first hit) target-handle))))
+;;; Rays stop *LINE-OF-SIGHT-TOLERANCE* short of their target: what lies that close to the
+;;; target (the surface it rests on, the target's own body) does not block the view, and the
+;;; rays do not have to be tested against the target's shape.
+
+(defparameter *line-of-sight-tolerance* 0.08d0
+  "Rays of a line-of-sight test end this many metres before their target point.")
 
 (defun object-handle-of (object)
   (and object (btr::object-handle object)))
 
+(defun sight-rays (eyes target)
+  "Flat double vectors FROM and TO of the rays from the EYES (a list of (x y z) double lists)
+to TARGET (x y z), each shortened by *LINE-OF-SIGHT-TOLERANCE*."
+  (let* ((n (length eyes))
+         (from (make-array (* 3 n) :element-type 'double-float))
+         (to (make-array (* 3 n) :element-type 'double-float)))
+    (loop for (ex ey ez) in eyes for i from 0
+          do (destructuring-bind (tx ty tz) target
+               (let* ((dx (- tx ex)) (dy (- ty ey)) (dz (- tz ez))
+                      (len (sqrt (+ (* dx dx) (* dy dy) (* dz dz))))
+                      (k (if (> len *line-of-sight-tolerance*)
+                             (- 1d0 (/ *line-of-sight-tolerance* len))
+                             0d0)))
+                 (setf (aref from (* 3 i)) ex (aref from (+ 1 (* 3 i))) ey (aref from (+ 2 (* 3 i))) ez
+                       (aref to (* 3 i)) (+ ex (* k dx)) (aref to (+ 1 (* 3 i))) (+ ey (* k dy))
+                       (aref to (+ 2 (* 3 i))) (+ ez (* k dz))))))
+    (values from to)))
+
+(defun rays-clear (world eyes target target-handle)
+  "For each of EYES, true when its shortened ray to TARGET hits nothing in WORLD but the object
+with TARGET-HANDLE."
+  (if (null eyes)
+      '()
+      (multiple-value-bind (from to) (sight-rays eyes target)
+        (mapcar (lambda (hit) (or (null hit) (and target-handle (= (first hit) target-handle))))
+                (cast-rays world from to)))))
+
+(defun xyz (point)
+  (list (coerce (cl-transforms:x point) 'double-float) (coerce (cl-transforms:y point) 'double-float)
+        (coerce (cl-transforms:z point) 'double-float)))
+
+(defun world-without (names &optional (world btr:*current-bullet-world*))
+  "A copy of WORLD without the objects NAMES (those WORLD has), e.g. without the robot whose
+body would block the rays cast from where it is going to stand."
+  (let ((copy (btr:copy-world world)))
+    (dolist (name names copy)
+      (when (btr:object copy name)
+        (btr:remove-object copy name)))))
+
 (defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
-                                                                   target-object (stride 2))
+                                                                   target-object (stride 2)
+                                                                   ignore-objects)
   "A cost function that is 1 at the map points from which the ray at CAMERA-HEIGHT to TARGET
-(a 3D point) reaches it (or its TARGET-OBJECT) unobstructed in WORLD, else 0.  On a grid it
-casts one ray per STRIDE x STRIDE block of cells that are not zero yet."
-  (let* ((tx (coerce (cl-transforms:x target) 'double-float))
-         (ty (coerce (cl-transforms:y target) 'double-float))
-         (tz (coerce (cl-transforms:z target) 'double-float))
+(a 3D point) reaches it (or its TARGET-OBJECT) unobstructed in WORLD, else 0; the objects named
+IGNORE-OBJECTS (e.g. the robot) do not block.  On a grid it casts one ray per STRIDE x STRIDE
+block of cells that are not zero yet."
+  (unless (typep stride '(integer 1 64))
+    (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
+  (unless (and (realp camera-height) (< (abs camera-height) 1d3))
+    (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: camera height ~s, expected a real." camera-height))
+  (let* ((world (if ignore-objects (world-without ignore-objects world) world))
+         (goal (xyz target))
          (h (coerce camera-height 'double-float))
          (handle (object-handle-of target-object)))
-    (unless (typep stride '(integer 1 64))
-      (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
-    (flet ((single (x y)
-             (let ((hit (first (cast-rays world
-                                          (make-array 3 :element-type 'double-float
-                                                        :initial-contents (list (coerce x 'double-float)
-                                                                                (coerce y 'double-float) h))
-                                          (make-array 3 :element-type 'double-float
-                                                        :initial-contents (list tx ty tz))))))
-               (if (hit-clear-p hit handle) 1d0 0d0))))
-      (make-cost-function
-       #'single
-       :name 'line-of-sight
-       :grid-evaluator
-       (lambda (costmap matrix r0 r1 c0 c1)
-         (declare (type (simple-array double-float (* *)) matrix))
-         (let ((blocks '()))
-           (loop for br from r0 below r1 by stride
-                 do (loop for bc from c0 below c1 by stride
-                          when (loop for r from br below (min r1 (+ br stride))
-                                       thereis (loop for c from bc below (min c1 (+ bc stride))
-                                                       thereis (> (aref matrix r c) 0d0)))
-                            do (push (cons br bc) blocks)))
-           (setf blocks (nreverse blocks))
-           (when blocks
-             (let* ((n (length blocks))
-                    (from (make-array (* 3 n) :element-type 'double-float))
-                    (to (make-array (* 3 n) :element-type 'double-float)))
-               (loop for (br . bc) in blocks for i from 0
-                     do (setf (aref from (* 3 i)) (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
-                              (aref from (+ 1 (* 3 i))) (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
-                              (aref from (+ 2 (* 3 i))) h
-                              (aref to (* 3 i)) tx (aref to (+ 1 (* 3 i))) ty (aref to (+ 2 (* 3 i))) tz))
-               (loop for (br . bc) in blocks
-                     for hit in (cast-rays world from to)
-                     unless (hit-clear-p hit handle)
-                       do (loop for r from br below (min r1 (+ br stride))
-                                do (loop for c from bc below (min c1 (+ bc stride))
-                                         do (setf (aref matrix r c) 0d0))))))))))))
+    (make-cost-function
+     (lambda (x y)
+       (if (first (rays-clear world (list (list (float x 1d0) (float y 1d0) h)) goal handle)) 1d0 0d0))
+     :name 'line-of-sight
+     :grid-evaluator
+     (lambda (costmap matrix r0 r1 c0 c1)
+       (declare (type (simple-array double-float (* *)) matrix))
+       (let ((blocks '()))
+         (loop for br from r0 below r1 by stride
+               do (loop for bc from c0 below c1 by stride
+                        when (loop for r from br below (min r1 (+ br stride))
+                                     thereis (loop for c from bc below (min c1 (+ bc stride))
+                                                     thereis (> (aref matrix r c) 0d0)))
+                          do (push (cons br bc) blocks)))
+         (setf blocks (nreverse blocks))
+         (loop for (br . bc) in blocks
+               for clear in (rays-clear world
+                                        (loop for (br . bc) in blocks
+                                              collect (list (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
+                                                            (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
+                                                            h))
+                                        goal handle)
+               unless clear
+                 do (loop for r from br below (min r1 (+ br stride))
+                          do (loop for c from bc below (min c1 (+ bc stride))
+                                   do (setf (aref matrix r c) 0d0)))))))))
 
-(defun view-target-points (target target-object &key (world btr:*current-bullet-world*))
-  "The points a line of sight must reach to see TARGET: its centre, and for an object the
+(defun view-target-points (target target-object)
+  "The points a line of sight must reach to see TARGET: TARGET itself, and for an object the
 centre and top of its bounding box and the middles of its four vertical sides."
-  (declare (ignore world))
   (if (null target-object)
       (list target)
       (multiple-value-bind (lo hi) (btr:aabb target-object)
@@ -172,20 +204,10 @@ centre and top of its bounding box and the middles of its four vertical sides."
                 (cl-transforms:make-3d-vector cx (+ cy sy) cz))))))
 
 (defun line-of-sight-p (eye points target-object &key (world btr:*current-bullet-world*))
-  "True when every ray from EYE (a 3D point) to POINTS reaches its point, or TARGET-OBJECT,
-unobstructed in WORLD."
-  (let* ((n (length points))
-         (from (make-array (* 3 n) :element-type 'double-float))
-         (to (make-array (* 3 n) :element-type 'double-float))
-         (handle (object-handle-of target-object)))
-    (loop for p in points for i from 0
-          do (setf (aref from (* 3 i)) (coerce (cl-transforms:x eye) 'double-float)
-                   (aref from (+ 1 (* 3 i))) (coerce (cl-transforms:y eye) 'double-float)
-                   (aref from (+ 2 (* 3 i))) (coerce (cl-transforms:z eye) 'double-float)
-                   (aref to (* 3 i)) (coerce (cl-transforms:x p) 'double-float)
-                   (aref to (+ 1 (* 3 i))) (coerce (cl-transforms:y p) 'double-float)
-                   (aref to (+ 2 (* 3 i))) (coerce (cl-transforms:z p) 'double-float)))
-    (every (lambda (hit) (hit-clear-p hit handle)) (cast-rays world from to))))
+  "True when every ray from EYE (a 3D point) to POINTS reaches its point (up to
+*LINE-OF-SIGHT-TOLERANCE*), or TARGET-OBJECT, unobstructed in WORLD."
+  (let ((e (xyz eye)) (handle (object-handle-of target-object)))
+    (every (lambda (p) (first (rays-clear world (list e) (xyz p) handle))) points)))
 
 ;;; ---- robot base poses in collision -------------------------------------------------------------------
 

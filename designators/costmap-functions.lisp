@@ -7,7 +7,7 @@
   (flet ((ok (x y)
            (unless (and (realp x) (realp y) (< (abs x) 1d6) (< (abs y) 1d6))
              (error "~a: the point ~s has non-finite or non-real coordinates." what point))
-           (return-from point-xy (values (coerce x 'double-float) (coerce y 'double-float)))))
+           (return-from point-xy (values (to-double x) (to-double y)))))
     (typecase point
       (cl-transforms:3d-vector (ok (cl-transforms:x point) (cl-transforms:y point)))
       (cl-transforms:pose (point-xy (cl-transforms:origin point) what))
@@ -32,7 +32,7 @@
              (unless (and (realp v) (< (abs v) 1d6))
                (error "MAKE-GAUSS-COST-FUNCTION: covariance ~s, entry (~d ~d) is ~s, expected ~
                        a finite real." covariance r c v))
-             (coerce v 'double-float))))
+             (to-double v))))
     (unless (or (and (listp covariance) (= (length covariance) 2)
                      (every (lambda (row) (and (listp row) (= (length row) 2))) covariance))
                 (and (arrayp covariance) (equal (array-dimensions covariance) '(2 2))))
@@ -55,8 +55,10 @@ from MEAN along x or y."
           (declare (type double-float ixx ixy iyy norm))
           (make-cost-function
            (lambda (x y)
-             (let ((a (- (coerce x 'double-float) mx)) (b (- (coerce y 'double-float) my)))
-               (* norm (exp (* -0.5d0 (+ (* ixx a a) (* 2 ixy a b) (* iyy b b)))))))
+             (declare (optimize speed))
+             (let ((a (- (float x 1d0) mx)) (b (- (float y 1d0) my)))
+               (declare (type double-float a b))
+               (* norm (exp (min 0d0 (* -0.5d0 (+ (* ixx a a) (* 2 ixy a b) (* iyy b b))))))))
            :name 'gauss
            :bounds (list (- mx dx) (- my dy) (+ mx dx) (+ my dy))))))))
 
@@ -66,10 +68,13 @@ with INVERT, 0 within DISTANCE and 1 farther."
   (multiple-value-bind (px py) (point-xy point "MAKE-RANGE-COST-FUNCTION point")
     (unless (and (realp distance) (>= distance 0) (< distance 1d6))
       (error "MAKE-RANGE-COST-FUNCTION: the distance is ~s, expected a non-negative real." distance))
-    (let ((d2 (expt (coerce distance 'double-float) 2)) (d (coerce distance 'double-float)))
+    (let* ((d (to-double distance)) (d2 (* d d)))
+      (declare (type double-float d2 px py))
       (make-cost-function
        (lambda (x y)
-         (let ((inside (<= (+ (expt (- x px) 2) (expt (- y py) 2)) d2)))
+         (declare (optimize speed))
+         (let* ((dx (- (float x 1d0) px)) (dy (- (float y 1d0) py))
+                (inside (<= (+ (* dx dx) (* dy dy)) d2)))
            (if (if invert (not inside) inside) 1d0 0d0)))
        :name (if invert 'range-invert 'range)
        :bounds (unless invert (list (- px d) (- py d) (+ px d) (+ py d)))))))
@@ -127,7 +132,7 @@ coordinate AXIS, else 0; with PREDICATE #'< or #'> it knows its half-plane."
     (error "Orientation samples ~s, expected an integer from 1 to 1000." samples))
   (unless (realp step) (error "Orientation sample step ~s, expected a real (radians)." step))
   (loop for i below samples
-        collect (+ yaw (* step (if (evenp i) (/ i 2) (- (/ (1+ i) 2)))))))
+        collect (+ yaw (* step (if (oddp i) (/ (1+ i) 2) (- (/ i 2)))))))
 
 (defun make-orientation-generator (yaw-function &key (samples 1) (sample-step (/ pi 18)))
   "An orientation generator from YAW-FUNCTION (x y) -> yaw in radians: SAMPLES orientations
@@ -157,7 +162,7 @@ pose), rotated by OFFSET radians, with SAMPLES orientations SAMPLE-STEP apart."
   "A height generator giving HEIGHT (metres) everywhere."
   (unless (and (realp height) (< (abs height) 1d6))
     (error "MAKE-CONSTANT-HEIGHT-FUNCTION: the height is ~s, expected a finite real." height))
-  (let ((z (list (coerce height 'double-float))))
+  (let ((z (list (to-double height))))
     (lambda (x y) (declare (ignore x y)) z)))
 
 ;;; ---- occupancy grids ---------------------------------------------------------------------------------

@@ -17,6 +17,11 @@ made from now on sample the same poses as after any earlier (SEED-COSTMAPS SEED)
   (setf *costmap-random-state* (sb-ext:seed-random-state seed))
   seed)
 
+(defun to-double (x)
+  "The real X as a double-float; single-floats by their shortest decimal value, so that 0.1
+becomes 0.1d0 rather than 0.10000000149011612d0."
+  (if (typep x 'single-float) (float (rationalize x) 1d0) (float x 1d0)))
+
 ;;; ---- conditions ------------------------------------------------------------------------------
 
 (define-condition invalid-probability-distribution (error)
@@ -128,15 +133,15 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
               cells; use a coarser resolution." width height resolution))
     (make-instance 'location-costmap
                    :width width :height height
-                   :resolution (coerce resolution 'double-float)
-                   :origin-x (coerce origin-x 'double-float)
-                   :origin-y (coerce origin-y 'double-float)
+                   :resolution (to-double resolution)
+                   :origin-x (to-double origin-x)
+                   :origin-y (to-double origin-y)
                    :random-state (sb-ext:seed-random-state
                                   (random (expt 2 62) *costmap-random-state*)))))
 
 (defmethod initialize-instance :after ((c location-costmap) &key)
-  (setf (slot-value c 'columns) (max 1 (round (width c) (resolution c)))
-        (slot-value c 'rows) (max 1 (round (height c) (resolution c)))))
+  (setf (slot-value c 'columns) (max 1 (round (to-double (width c)) (resolution c)))
+        (slot-value c 'rows) (max 1 (round (to-double (height c)) (resolution c)))))
 
 (defun cell-center-x (costmap column)
   "The map x of the centre of the cells in COLUMN."
@@ -245,6 +250,27 @@ height generators of all of them."
            :reason (format nil "the cost function ~(~a~) gave ~s at (~,3f ~,3f), expected a ~
                                 finite non-negative real." name value x y))))
 
+(defun multiply-by-function (costmap matrix name function r0 r1 c0 c1)
+  "Multiply the non-zero cells of MATRIX in rows R0..R1 and columns C0..C1 (end exclusive) by
+FUNCTION (x y) at their centres."
+  (declare (type (simple-array double-float (* *)) matrix) (type fixnum r0 r1 c0 c1)
+           (type function function))
+  (let ((xs (make-array (max 0 (- c1 c0)) :element-type 'double-float)))
+    (loop for c from c0 below c1 do (setf (aref xs (- c c0)) (cell-center-x costmap c)))
+    (loop for r of-type fixnum from r0 below r1
+          for y of-type double-float = (cell-center-y costmap r)
+          do (loop for c of-type fixnum from c0 below c1
+                   when (> (aref matrix r c) 0d0)
+                     do (let* ((x (aref xs (- c c0)))
+                               (v (funcall function x y)))
+                          (unless (typep v 'double-float)
+                            (check-cell-value costmap name v x y)
+                            (setf v (coerce v 'double-float)))
+                          (locally (declare (type double-float v))
+                            (unless (and (>= v 0d0) (< v most-positive-double-float))
+                              (check-cell-value costmap name v x y))
+                            (setf (aref matrix r c) (* (aref matrix r c) v))))))))
+
 (defun get-cost-map (costmap)
   "The value grid of COSTMAP: a (rows x columns) double-float array, row = y index, column = x
 index; computed once and cached until another function is registered."
@@ -259,14 +285,7 @@ index; computed once and cached until another function is registered."
                   for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
                   do (if evaluator
                          (funcall evaluator costmap m r0 r1 c0 c1)
-                         (loop for r fixnum from r0 below r1
-                               for y = (cell-center-y costmap r)
-                               do (loop for c fixnum from c0 below c1
-                                        when (> (aref m r c) 0d0)
-                                          do (let* ((x (cell-center-x costmap c))
-                                                    (v (funcall fn x y)))
-                                               (check-cell-value costmap name v x y)
-                                               (setf (aref m r c) (* (aref m r c) (coerce v 'double-float))))))))))
+                         (multiply-by-function costmap m name fn r0 r1 c0 c1)))))
         (setf (%matrix costmap) m))))
 
 (defun get-map-value (costmap x y)
@@ -376,4 +395,4 @@ which MAKE-LOCATION-COSTMAP seeded from *COSTMAP-RANDOM-STATE*."
                            append (loop for q in orientations
                                         collect (cl-transforms-stamped:make-pose-stamped
                                                  frame-id 0d0
-                                                 (cl-transforms:make-3d-vector x y z) q)))))))))))
+                                                 (cl-transforms:make-3d-vector x y z) q))))))))))))

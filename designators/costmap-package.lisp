@@ -25,4 +25,21 @@
    #:make-orientation-generator #:make-identity-orientation-generator
    ;; occupancy grids
    #:occupancy-grid #:make-occupancy-grid
-   #:invalid-probability-distribution))
+   #:invalid-probability-distribution
+   ;; costmap geometry, sampling and determinism
+   #:origin-x #:origin-y #:resolution #:width #:height #:costmap-rows #:costmap-columns
+   #:cost-function #:make-cost-function #:cost-function-name #:cost-function-bounds
+   #:make-rectangle-cost-function #:make-line-of-sight-cost-function
+   #:generate-orientations #:generate-heights #:costmap-metadata-value
+   #:*costmap-random-state* #:seed-costmaps
+   #:occupied-p #:occupancy-bits #:pad-occupancy-grid #:environment-occupancy-grid
+   #:*occupancy-z-min* #:*occupancy-z-max*
+   ;; designators and the belief state
+   #:costmap #:costmap-add-function #:costmap-add-orientation-generator
+   #:costmap-add-height-generator #:merged-desig-costmap #:designator-costmap
+   #:costmap-location-generator #:visible-for-costmap #:reachable-for-costmap #:on-costmap
+   #:robot-pose-collisions #:robot-pose-distance-validator
+   #:robot-pose-visibility-validator #:robot-pose-collision-validator
+   #:line-of-sight-p #:robot-camera-height
+   ;; pictures
+   #:costmap-heat-map-png))

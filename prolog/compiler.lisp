@@ -34,9 +34,44 @@
   (is-var x))
 
 (defun has-source-vars-p (x)
-  (cond ((source-var-p x) t)
-        ((consp x) (or (has-source-vars-p (car x)) (has-source-vars-p (cdr x))))
-        (t nil)))
+  (loop
+    (cond ((source-var-p x) (return t))
+          ((consp x) (when (has-source-vars-p (car x)) (return t))
+           (setf x (cdr x)))
+          (t (return nil)))))
+
+(defun term-vars (term)
+  "The distinct ?symbols of TERM (without ?_) in order of first occurrence."
+  (let ((vars '()))
+    (labels ((walk (x)
+               (loop
+                 (cond ((anonymous-var-p x) (return))
+                       ((source-var-p x) (pushnew x vars :test #'eq) (return))
+                       ((consp x) (walk (car x)) (setf x (cdr x)))
+                       (t (return))))))
+      (walk term))
+    (nreverse vars)))
+
+(defun substitute-symbols (term function)
+  "TERM with every ?symbol replaced by (FUNCTION symbol); unchanged parts are shared. Walks
+list spines iteratively."
+  (cond ((source-var-p term) (funcall (the function function) term))
+        ((atom term) term)
+        (t (let ((items '()) (x term) (changed nil) (tail nil))
+             (loop
+               (let ((a (substitute-symbols (car x) function)))
+                 (push a items)
+                 (unless (eq a (car x)) (setf changed t)))
+               (let ((d (cdr x)))
+                 (if (and (consp d) (not (source-var-p d)))
+                     (setf x d)
+                     (progn (setf tail (substitute-symbols d function))
+                            (unless (eq tail d) (setf changed t))
+                            (return)))))
+             (if changed
+                 (let ((result tail))
+                   (dolist (a items result) (setf result (cons a result))))
+                 term)))))
 
 (defun var-index (sym)
   (or (gethash sym *env*)
@@ -120,7 +155,7 @@ is a symbol, got ~s." clause)))
         (*seen* '()))
     (destructuring-bind (head . body) clause
       (let* ((match (compile-match (cdr head)))
-             (init (loop for v in (vars-in body)
+             (init (loop for v in (term-vars body)
                          unless (member v *seen* :test #'eq)
                            collect (prog1 (cons (var-index v) v) (push v *seen*))))
              (body-fn (and body (compile-body body)))

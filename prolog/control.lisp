@@ -175,7 +175,7 @@ frame holding a new variable for each ?symbol, and the alist symbol → frame in
         (*env* (make-hash-table :test 'eq))
         (*nvars* 0)
         (*seen* '()))
-    (dolist (v (append (vars-in goal) extra-vars))
+    (dolist (v (append (term-vars goal) extra-vars))
       (var-index v)
       (pushnew v *seen*))
     (let* ((fn (compile-goal goal))
@@ -242,7 +242,7 @@ frame holding a new variable for each ?symbol, and the alist symbol → frame in
 (define-control every (generator pattern)
   ;; PATTERN must hold for every solution of GENERATOR, and its variables that GENERATOR does
   ;; not bind must take the same values in all of them; they are bound to those values.
-  (let* ((free (set-difference (vars-in pattern) (vars-in generator)))
+  (let* ((free (set-difference (term-vars pattern) (term-vars generator)))
          (g (compile-goal generator))
          (p (compile-goal pattern))
          (vb (compile-build free)))

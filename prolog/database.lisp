@@ -203,15 +203,11 @@ alist symbol → variable."
   "VALUE from a handler's binding alist as a run-time term: view symbols become their variables,
 other ?symbols fresh variables."
   (let ((fresh '()))
-    (labels ((walk (x)
-               (cond ((is-var x)
-                      (or (cdr (assoc x view :test #'eq))
-                          (cdr (assoc x fresh :test #'eq))
-                          (let ((v (make-pvar x))) (push (cons x v) fresh) v)))
-                     ((consp x) (let ((a (walk (car x))) (d (walk (cdr x))))
-                                  (if (and (eq a (car x)) (eq d (cdr x))) x (cons a d))))
-                     (t x))))
-      (walk value))))
+    (substitute-symbols value
+                        (lambda (x)
+                          (or (cdr (assoc x view :test #'eq))
+                              (cdr (assoc x fresh :test #'eq))
+                              (let ((v (make-pvar x))) (push (cons x v) fresh) v))))))
 
 (defun apply-handler-solution (m solution view)
   (loop for (sym . var) in view

@@ -7,13 +7,10 @@
 
 (defun convert-binding-value (value env frame)
   "VALUE from an initial binding alist as a run-time term over FRAME's variables."
-  (cond ((anonymous-var-p value) (make-pvar))
-        ((is-var value) (svref frame (cdr (assoc value env :test #'eq))))
-        ((consp value)
-         (let ((a (convert-binding-value (car value) env frame))
-               (d (convert-binding-value (cdr value) env frame)))
-           (if (and (eq a (car value)) (eq d (cdr value))) value (cons a d))))
-        (t value)))
+  (substitute-symbols value (lambda (sym)
+                              (if (anonymous-var-p sym)
+                                  (make-pvar)
+                                  (svref frame (cdr (assoc sym env :test #'eq)))))))
 
 (defun solution-alist (out frame env)
   "The binding alist of the output variables OUT in FRAME: values fully substituted, unbound
@@ -52,9 +49,9 @@ only the first is computed before PROLOG returns."
                     b)))
   (let* ((binding-vars (remove-duplicates (mapcar #'car bindings) :from-end t))
          (out (remove-if #'anonymous-var-p
-                         (remove-duplicates (append (vars-in goal) binding-vars) :from-end t))))
+                         (remove-duplicates (append (term-vars goal) binding-vars) :from-end t))))
     (multiple-value-bind (fn frame env)
-        (compile-goal-term goal (append binding-vars (vars-in (mapcar #'cdr bindings))))
+        (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
       (let ((m (make-machine))
             (state :fresh))
         ;; initial bindings; no choice point exists yet, so nothing needs trailing
@@ -75,8 +72,10 @@ only the first is computed before PROLOG returns."
                                          (or (funcall (the function fn) m frame
                                                       #'final-continuation 0)
                                              (backtrack m)))
-                                  (backtrack m))))
+                                  (backtrack m)))
+                        (when found
+                          (setf found (list (solution-alist out frame env)))))
                    (unless found (setf state :done)))
                  (if found
-                     (values (solution-alist out frame env) t)
+                     (values (car found) t)
                      (values nil nil))))))))))

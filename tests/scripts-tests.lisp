@@ -33,5 +33,5 @@
        (is (and passed (>= passed ,min-passed))
            "~a passed ~a checks, expected at least ~d" ,script passed ,min-passed))))
 
-(def-script-test models-check "models-check.sh" 10)
+(def-script-test models-check "models-check.sh" 8)
 (def-script-test ros-launch-check "ros-launch-check.sh" 20)

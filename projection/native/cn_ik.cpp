@@ -1,15 +1,42 @@
-// Kinematic chains of articulated objects: forward and inverse kinematics with KDL.
+// Kinematic chains of articulated objects: forward kinematics with KDL, inverse kinematics
+// with a damped least-squares (Levenberg-Marquardt) solver on the chain's geometric Jacobian.
 #include "cn_internal.hpp"
 
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
-#include <kdl/chainiksolverpos_lma.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <algorithm>
-#include <random>
 
 namespace cn {
 namespace {
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Jac = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+// How a joint value is kept valid: clamped into its limits, wrapped to [-pi, pi] (continuous
+// or unlimited revolute joints), or left free (unlimited prismatic joints).
+enum class Range { Clamp, Wrap, Free };
+
+// A movable joint of the IK model: the fixed transform (R, p) from the previous joint's moving
+// frame (the base link for the first joint) to this joint's frame, then a rotation about or a
+// translation along `axis` (unit, in the joint frame).  unit_axis: 0/1/2 when the axis is a
+// coordinate axis (sign in unit_sign), else -1.
+struct KinJoint {
+  Mat3 R;
+  Vec3 p;
+  Vec3 axis;
+  bool prismatic = false;
+  int unit_axis = -1;
+  double unit_sign = 1;
+  Range range = Range::Clamp;
+};
 
 struct Chain {
   ModelP model;
@@ -17,8 +44,10 @@ struct Chain {
   std::vector<int> joints;          // robot joint index per chain joint
   std::vector<double> lower, upper; // limits (continuous: -pi..pi, unlimited = false)
   std::vector<bool> limited;
+  std::vector<KinJoint> kin;        // IK model, one per movable joint
+  Mat3 tip_R = Mat3::Identity();    // fixed transform from the last joint's frame to the tip
+  Vec3 tip_p = Vec3::Zero();
   std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
-  std::unique_ptr<KDL::ChainIkSolverPos_LMA> ik;
 };
 
 std::mutex g_chain_mutex;
@@ -59,31 +88,220 @@ void read_q(const Chain &c, const double *q, KDL::JntArray &out, const char *wha
   }
 }
 
-// bring q into the limits by whole turns where possible; true if within limits
-bool normalize(const Chain &c, KDL::JntArray &q) {
-  bool ok = true;
-  for (size_t i = 0; i < c.joints.size(); ++i) {
-    const JointM &j = c.model->joints[c.joints[i]];
-    if (j.type == CN_JOINT_CONTINUOUS) {
-      q(i) = std::remainder(q(i), 2 * M_PI);
-      continue;
-    }
-    if (!c.limited[i]) continue;
-    if (j.type == CN_JOINT_REVOLUTE) {
-      while (q(i) > c.upper[i] + 1e-9 && q(i) - 2 * M_PI >= c.lower[i] - 1e-9) q(i) -= 2 * M_PI;
-      while (q(i) < c.lower[i] - 1e-9 && q(i) + 2 * M_PI <= c.upper[i] + 1e-9) q(i) += 2 * M_PI;
-    }
-    if (q(i) < c.lower[i] - 1e-9 || q(i) > c.upper[i] + 1e-9) ok = false;
-  }
-  return ok;
+Mat3 rot_matrix(const btTransform &t) {
+  const btMatrix3x3 &b = t.getBasis();
+  Mat3 m;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) m(r, k) = b[r][k];
+  return m;
 }
 
-void errors(const KDL::Frame &a, const KDL::Frame &b, double &pos, double &rot) {
-  pos = (a.p - b.p).Norm();
-  KDL::Rotation d = a.M.Inverse() * b.M;
-  KDL::Vector axis;
-  rot = std::fabs(d.GetRotAngle(axis));
+Vec3 position(const btTransform &t) {
+  const btVector3 &o = t.getOrigin();
+  return Vec3(o.x(), o.y(), o.z());
 }
+
+// Rotation vector (unit axis times angle, angle in [0, pi]) of the rotation matrix d.
+Vec3 rot_log(const Mat3 &d, double &angle) {
+  Vec3 v(d(2, 1) - d(1, 2), d(0, 2) - d(2, 0), d(1, 0) - d(0, 1));  // 2 sin(angle) axis
+  double s = 0.5 * v.norm(), co = 0.5 * (d.trace() - 1);
+  angle = std::atan2(s, co);
+  if (s > 1e-7) return v * (angle / (2 * s));
+  if (co > 0) return 0.5 * v;
+  // near a half turn: the symmetric part is cos(angle) I + (1 - cos(angle)) axis axis^T
+  Mat3 sym = 0.5 * (d + d.transpose());
+  int i;
+  sym.diagonal().maxCoeff(&i);
+  Vec3 axis = (sym.col(i) - co * Vec3::Unit(i)) / std::sqrt(std::max(1e-300, sym(i, i) - co) * (1 - co));
+  axis.normalize();
+  if (axis.dot(v) < 0) axis = -axis;
+  return axis * angle;
+}
+
+// R := R * rotation of the joint by q
+void rotate_by(const KinJoint &k, double q, Mat3 &R) {
+  if (k.unit_axis < 0) {
+    R = R * Eigen::AngleAxisd(q, k.axis).toRotationMatrix();
+    return;
+  }
+  double s = std::sin(k.unit_sign * q), c = std::cos(k.unit_sign * q);
+  int b = (k.unit_axis + 1) % 3, d = (k.unit_axis + 2) % 3;
+  Vec3 cb = R.col(b), cd = R.col(d);
+  R.col(b) = c * cb + s * cd;
+  R.col(d) = c * cd - s * cb;
+}
+
+// Tip pose (R, p) in the base frame for joint values q; with J, also the geometric Jacobian
+// (rows: linear velocity of the tip, angular velocity times `rot_weight`; base frame).
+void kin_fk(const Chain &c, const double *q, Mat3 &R, Vec3 &p, Jac *J, double rot_weight) {
+  R.setIdentity();
+  p.setZero();
+  const size_t n = c.kin.size();
+  for (size_t i = 0; i < n; ++i) {
+    const KinJoint &k = c.kin[i];
+    p += R * k.p;
+    R = R * k.R;
+    Vec3 z = R * k.axis;
+    if (k.prismatic) {
+      p += z * q[i];
+      if (J) J->col(i) << z, Vec3::Zero();
+    } else {
+      if (J) J->col(i) << p, z;  // joint origin for now, turned into z x (tip - origin) below
+      rotate_by(k, q[i], R);
+    }
+  }
+  p += R * c.tip_p;
+  R = R * c.tip_R;
+  if (J)
+    for (size_t i = 0; i < n; ++i)
+      if (!c.kin[i].prismatic) {
+        Vec3 o = J->col(i).head<3>(), z = J->col(i).tail<3>();
+        J->col(i).head<3>() = z.cross(p - o);
+      }
+  if (J) J->bottomRows<3>() *= rot_weight;
+}
+
+// q within the joint ranges: limited joints clamped, revolute joints without limits wrapped.
+void keep_in_range(const Chain &c, double *q) {
+  for (size_t i = 0; i < c.kin.size(); ++i) switch (c.kin[i].range) {
+      case Range::Clamp: q[i] = std::min(c.upper[i], std::max(c.lower[i], q[i])); break;
+      case Range::Wrap: q[i] = std::remainder(q[i], 2 * M_PI); break;
+      case Range::Free: break;
+    }
+}
+
+// A seed brought into the ranges: limited revolute joints first by whole turns, then clamped.
+void seed_into_range(const Chain &c, double *q) {
+  for (size_t i = 0; i < c.kin.size(); ++i)
+    if (c.kin[i].range == Range::Clamp && !c.kin[i].prismatic) {
+      while (q[i] > c.upper[i] && q[i] - 2 * M_PI >= c.lower[i]) q[i] -= 2 * M_PI;
+      while (q[i] < c.lower[i] && q[i] + 2 * M_PI <= c.upper[i]) q[i] += 2 * M_PI;
+    }
+  keep_in_range(c, q);
+}
+
+// splitmix64: restarts depend on the rng seed only, the same on every platform
+struct Rng {
+  uint64_t state;
+  double uniform(double lo, double hi) {
+    state += 0x9e3779b97f4a7c15ULL;
+    uint64_t z = state;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
+  }
+};
+
+// Tuning of the solver.  The rotation error is weighted as if 1 rad were kRotWeight m.
+constexpr double kRotWeight = 0.4;
+constexpr int kMaxIterations = 40;   // per start
+constexpr int kStallWindow = 6;      // a start is given up when the error has not dropped
+constexpr double kStallRatio = 0.9;  // below kStallRatio of its value kStallWindow steps ago
+constexpr double kDampFloor = 1e-10; // damping added to the squared error
+constexpr double kMaxStep = 0.5;     // largest joint change in one step (rad or m)
+constexpr int kPolishSteps = 3;      // steps spent below the tolerance towards 1/100 of it
+
+struct Errors {
+  Vec6 e;              // weighted error: position (m), rotation vector (times kRotWeight)
+  double pos2, rot2;   // squared position (m^2) and rotation (rad^2) errors
+  double cost;         // squared norm of e
+};
+
+void measure(const Mat3 &R, const Vec3 &p, const Mat3 &goal_R, const Vec3 &goal_p, Errors &out) {
+  double angle;
+  Vec3 w = rot_log(goal_R * R.transpose(), angle);
+  Vec3 dp = goal_p - p;
+  out.e << dp, kRotWeight * w;
+  out.pos2 = dp.squaredNorm();
+  out.rot2 = angle * angle;
+  out.cost = out.e.squaredNorm();
+}
+
+// Per-call work space of the solver (the chain itself is shared and never written).
+struct IkSolver {
+  const Chain &c;
+  Mat3 goal_R;
+  Vec3 goal_p;
+  double pos2_tol, rot2_tol;
+  size_t n;
+  Jac J, J_trial, Jm;  // Jacobians at q and at the trial point; J with held joints dropped
+  double mu = 1;        // damping factor (times the squared error)
+  std::vector<double> q, trial;
+  Eigen::VectorXd dq;
+  IkSolver(const Chain &ch, const Mat3 &gR, const Vec3 &gp, double pos_tol, double rot_tol)
+      : c(ch), goal_R(gR), goal_p(gp), pos2_tol(pos_tol * pos_tol), rot2_tol(rot_tol * rot_tol),
+        n(ch.kin.size()), J(6, n), J_trial(6, n), Jm(6, n), q(n), trial(n), dq(n) {}
+
+  bool within(const Errors &e, double scale2) const {
+    return e.pos2 <= pos2_tol * scale2 && e.rot2 <= rot2_tol * scale2;
+  }
+
+  // The damped least-squares step dq for the error err.  Joints resting on a limit that the
+  // step would push further out are held still (their columns dropped) and the step solved
+  // again, so that the other joints take over their share of the motion.
+  void step(const Errors &err) {
+    double damping = mu * err.cost + kDampFloor;
+    Jm = J;
+    for (int pass = 0; pass < 3; ++pass) {
+      Mat6 A = Jm * Jm.transpose();
+      A.diagonal().array() += damping;
+      Vec6 y = A.llt().solve(err.e);
+      dq.noalias() = Jm.transpose() * y;
+      bool held = false;
+      for (size_t i = 0; i < n; ++i)
+        if (c.kin[i].range == Range::Clamp && dq(i) != 0 &&
+            ((q[i] <= c.lower[i] && dq(i) < 0) || (q[i] >= c.upper[i] && dq(i) > 0))) {
+          Jm.col(i).setZero();
+          held = true;
+        }
+      if (!held) break;
+    }
+    for (size_t i = 0; i < n; ++i)
+      if (c.kin[i].range == Range::Clamp &&
+          ((q[i] <= c.lower[i] && dq(i) < 0) || (q[i] >= c.upper[i] && dq(i) > 0)))
+        dq(i) = 0;
+    double big = dq.cwiseAbs().maxCoeff();
+    if (big > kMaxStep) dq *= kMaxStep / big;
+  }
+
+  // Levenberg-Marquardt from start (within the ranges); leaves the best joint values of this
+  // start in q and their errors in err.  Returns true when they are within the tolerances.
+  bool descend(const double *start, Errors &err) {
+    std::copy(start, start + n, q.begin());
+    Mat3 R;
+    Vec3 p;
+    kin_fk(c, q.data(), R, p, &J, kRotWeight);
+    measure(R, p, goal_R, goal_p, err);
+    double history[kStallWindow];
+    int polish = 0;
+    mu = 1;
+    for (int it = 0; it < kMaxIterations; ++it) {
+      if (within(err, 1)) {
+        if (within(err, 1e-4) || polish++ >= kPolishSteps) return true;
+      }
+      history[it % kStallWindow] = err.cost;
+      if (it >= kStallWindow && err.cost > kStallRatio * history[(it + 1) % kStallWindow] &&
+          !within(err, 1))
+        return false;
+      step(err);
+      for (size_t i = 0; i < n; ++i) trial[i] = q[i] + dq(i);
+      keep_in_range(c, trial.data());
+      kin_fk(c, trial.data(), R, p, &J_trial, kRotWeight);
+      Errors te;
+      measure(R, p, goal_R, goal_p, te);
+      if (te.cost < err.cost) {
+        q.swap(trial);
+        J.swap(J_trial);
+        err = te;
+        mu = std::max(0.25 * mu, 1e-3);
+      } else {
+        mu *= 8;
+      }
+    }
+    return within(err, 1);
+  }
+};
 
 }  // namespace
 }  // namespace cn
@@ -113,6 +331,7 @@ int cn_chain_create(int wh, int r, const char *base, const char *tip) {
     std::reverse(path.begin(), path.end());
     auto c = std::make_unique<Chain>();
     c->model = o.model;
+    btTransform fixed = btTransform::getIdentity();  // fixed joints since the last movable one
     for (int j : path) {
       const JointM &jm = m.joints[j];
       KDL::Frame f = to_kdl(jm.origin);
@@ -129,14 +348,32 @@ int cn_chain_create(int wh, int r, const char *base, const char *tip) {
         c->limited.push_back(lim);
         c->lower.push_back(lim ? jm.lower : -M_PI);
         c->upper.push_back(lim ? jm.upper : M_PI);
+        KinJoint k;
+        btTransform t = fixed * jm.origin;
+        k.R = rot_matrix(t);
+        k.p = position(t);
+        k.axis = Vec3(jm.axis.x(), jm.axis.y(), jm.axis.z());
+        if (!(k.axis.norm() > 1e-12))
+          fail(CN_E_PARSE, "joint '%s' has a zero axis", jm.name.c_str());
+        k.axis.normalize();
+        k.prismatic = jm.type == CN_JOINT_PRISMATIC;
+        for (int a = 0; a < 3; ++a)
+          if (std::fabs(std::fabs(k.axis(a)) - 1) < 1e-15) {
+            k.unit_axis = a;
+            k.unit_sign = k.axis(a) > 0 ? 1 : -1;
+          }
+        k.range = lim ? Range::Clamp : k.prismatic ? Range::Free : Range::Wrap;
+        c->kin.push_back(k);
+        fixed = btTransform::getIdentity();
+      } else {
+        fixed = fixed * jm.origin;
       }
     }
+    c->tip_R = rot_matrix(fixed);
+    c->tip_p = position(fixed);
     if (c->joints.empty())
       fail(CN_E_NAME, "chain from '%s' to '%s' has no movable joint", b.c_str(), t.c_str());
-    Eigen::Matrix<double, 6, 1> L;
-    L << 1, 1, 1, 0.1, 0.1, 0.1;
     c->fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(c->chain);
-    c->ik = std::make_unique<KDL::ChainIkSolverPos_LMA>(c->chain, L, 1e-5, 100, 1e-12);
     std::lock_guard<std::mutex> lock(g_chain_mutex);
     int slot;
     if (!g_chain_free.empty()) {
@@ -214,51 +451,40 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     if (max_restarts < 0) fail(CN_E_ARG, "max restarts %d, expected >= 0", max_restarts);
     check_positive(pos_tol, "position tolerance");
     check_positive(rot_tol, "rotation tolerance");
-    KDL::Frame goal = to_kdl(t);
-    std::mt19937 rng(rng_seed);
     const size_t n = c.joints.size();
-    KDL::JntArray q(n), best(q0), clamped(n);
-    double best_pos = 1e300, best_rot = 1e300;
-    bool have_clamped = false, solved = false;
-    for (int attempt = 0; attempt <= max_restarts && !solved; ++attempt) {
-      KDL::JntArray init(n);
-      if (attempt == 0) init = q0;
-      else if (have_clamped && attempt % 2 == 1) init = clamped;
-      else
-        for (size_t i = 0; i < n; ++i)
-          init(i) = std::uniform_real_distribution<double>(c.lower[i], c.upper[i])(rng);
-      have_clamped = false;
-      c.ik->CartToJnt(init, goal, q);
-      bool within = normalize(c, q);
-      if (!within) {
-        clamped = q;
-        for (size_t i = 0; i < n; ++i)
-          if (c.limited[i]) clamped(i) = std::min(c.upper[i], std::max(c.lower[i], q(i)));
-        have_clamped = true;
-        continue;
+    IkSolver solver(c, rot_matrix(t), position(t), pos_tol, rot_tol);
+    std::vector<double> start(n), best(n);
+    for (size_t i = 0; i < n; ++i) start[i] = q0(i);
+    seed_into_range(c, start.data());
+    best = start;
+    Rng rng{rng_seed};
+    Errors err, best_err;
+    best_err.cost = HUGE_VAL;
+    for (int attempt = 0; attempt <= max_restarts; ++attempt) {
+      if (attempt > 0)
+        for (size_t i = 0; i < n; ++i) start[i] = rng.uniform(c.lower[i], c.upper[i]);
+      bool ok = solver.descend(start.data(), err);
+      if (ok || err.cost < best_err.cost) {
+        best = solver.q;
+        best_err = err;
       }
-      KDL::Frame f;
-      c.fk->JntToCart(q, f);
-      double pe, re;
-      errors(f, goal, pe, re);
-      if (pe + re < best_pos + best_rot) {
-        best = q;
-        best_pos = pe;
-        best_rot = re;
-      }
-      if (pe <= pos_tol && re <= rot_tol) solved = true;
+      if (ok) break;
     }
-    for (size_t i = 0; i < n; ++i) out_q[i] = best(i);
+    // the answer is judged with the same forward kinematics as cn_chain_fk
+    KDL::JntArray qb(n);
+    for (size_t i = 0; i < n; ++i) qb(i) = out_q[i] = best[i];
+    KDL::Frame f;
+    if (c.fk->JntToCart(qb, f) < 0) fail(CN_E_INTERNAL, "KDL forward kinematics failed");
+    Mat3 R;
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) R(r, k) = f.M(r, k);
+    double pos = (position(t) - Vec3(f.p.x(), f.p.y(), f.p.z())).norm(), rot;
+    rot_log(rot_matrix(t) * R.transpose(), rot);
     if (out_err) {
-      if (best_pos > 1e299) {
-        KDL::Frame f;
-        c.fk->JntToCart(best, f);
-        errors(f, goal, best_pos, best_rot);
-      }
-      out_err[0] = best_pos;
-      out_err[1] = best_rot;
+      out_err[0] = pos;
+      out_err[1] = rot;
     }
-    return solved ? 0 : 1;
+    return pos <= pos_tol && rot <= rot_tol ? 0 : 1;
   });
 }
 

@@ -9,13 +9,15 @@
                               ignore-links)
   "The names of the objects the robot collides with: contacts of its links (except the links
 in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
-with anything but the robot and each other. The floor does not collide with robots."
+with anything but the robot and each other. Contacts of the robot with the floor (static
+planes) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
          (hits '()))
     (loop for (a la b lb) in (btr::contact-records world robot)
           for other = (if (eq a robot) b a)
           for link = (if (eq a robot) la lb)
           unless (or (member (btr:name other) attached)
+                     (eq (btr::object-kind other) :static-plane)
                      (and link (member link ignore-links :test #'string=)))
             do (pushnew (btr:name other) hits))
     (dolist (name attached)

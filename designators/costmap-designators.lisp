@@ -1,0 +1,308 @@
+;;;; Location designators resolved through costmaps: the DESIG-COSTMAP predicate, the
+;;;; VISIBLE-FOR, REACHABLE-FOR and ON costmaps, the costmap location generator and validators.
+
+(in-package :cram-location-costmap)
+
+(defparameter *visibility-gauss-share* 0.5d0
+  "Standard deviation of the VISIBLE-FOR gaussian as a share of VISIBILITY-COSTMAP-SIZE.")
+
+(defparameter *reach-gauss-share* 0.5d0
+  "Standard deviation of the REACHABLE-FOR gaussian as a share of COSTMAP-IN-REACH-DISTANCE.")
+
+(defparameter *surface-margin* 0.05d0
+  "Distance (metres) ON samples keep from the edges of a surface when no object is given.")
+
+(defparameter *line-of-sight-stride* 2
+  "VISIBLE-FOR costmaps cast one ray per block of this many cells squared.")
+
+(defun diagonal-covariance (sigma)
+  (let ((v (* sigma sigma))) (list (list v 0) (list 0 v))))
+
+(defun metadata (predicate &optional (default nil default-p))
+  (if default-p
+      (costmap-metadata-value predicate :default default)
+      (costmap-metadata-value predicate)))
+
+(defun add-occupancy (costmap padding)
+  (register-cost-function
+   costmap
+   (make-occupancy-grid-cost-function
+    (environment-occupancy-grid :padding padding :width (width costmap) :height (height costmap)
+                                :origin-x (origin-x costmap) :origin-y (origin-y costmap)
+                                :resolution (resolution costmap)))
+   'occupancy 1))
+
+(defun visible-for-costmap (designator robot)
+  "The costmap of the base poses from which the robot ROBOT sees the target of DESIGNATOR:
+free space (COSTMAP-PADDING) within VISIBILITY-COSTMAP-SIZE of the target, a gaussian around
+it, and a line of sight from the camera height; the base faces the target."
+  (let ((robot (designator-robot-name robot)))
+    (with-robot (robot)
+      (multiple-value-bind (target object) (designator-target designator)
+        (let* ((costmap (make-location-costmap))
+               (radius (metadata 'visibility-costmap-size))
+               (padding (metadata 'costmap-padding))
+               (samples (metadata 'orientation-samples 1))
+               (step (metadata 'orientation-sample-step (/ pi 18))))
+          (register-cost-function costmap (make-range-cost-function target radius) 'visibility-range 0)
+          (add-occupancy costmap padding)
+          (register-cost-function costmap (make-range-cost-function target padding :invert t)
+                                  'visibility-minimal-range 2)
+          (register-cost-function costmap (make-gauss-cost-function
+                                           target (diagonal-covariance (* radius *visibility-gauss-share*)))
+                                  'visibility-gauss 3)
+          (register-cost-function costmap
+                                  (make-line-of-sight-cost-function
+                                   target (robot-camera-height robot)
+                                   :target-object object :stride *line-of-sight-stride*
+                                   :ignore-objects (let ((o (robot-world-object robot)))
+                                                     (and o (list (btr:name o)))))
+                                  'line-of-sight 20)
+          (register-orientation-generator costmap (make-angle-to-point-generator
+                                                   target :samples samples :sample-step step))
+          (register-height-generator costmap (make-constant-height-function 0))
+          costmap)))))
+
+(defun reachable-for-costmap (designator robot)
+  "The costmap of the base poses from which the robot ROBOT reaches the target of DESIGNATOR:
+free space (COSTMAP-MANIPULATION-PADDING), between COSTMAP-REACH-MINIMAL-DISTANCE and
+COSTMAP-IN-REACH-DISTANCE from the target, a gaussian around it; the base faces the target,
+turned so that the shoulder of the ARM (when given) faces it."
+  (let ((robot (designator-robot-name robot)))
+    (with-robot (robot)
+      (multiple-value-bind (target) (designator-target designator)
+        (let* ((costmap (make-location-costmap))
+               (reach (metadata 'costmap-in-reach-distance))
+               (minimal (metadata 'costmap-reach-minimal-distance 0))
+               (padding (metadata 'costmap-manipulation-padding (metadata 'costmap-padding)))
+               (samples (metadata 'orientation-samples 1))
+               (step (metadata 'orientation-sample-step (/ pi 18)))
+               (arm (desig:desig-prop-value designator :arm))
+               (lateral (if arm (arm-lateral-offset robot arm) 0d0)))
+          (multiple-value-bind (tx ty) (point-xy target "REACHABLE-FOR target")
+            (register-cost-function costmap (make-range-cost-function target reach) 'reach-range 0)
+            (add-occupancy costmap padding)
+            (register-cost-function costmap (make-range-cost-function target minimal :invert t)
+                                    'reach-minimal-range 2)
+            (register-cost-function costmap (make-gauss-cost-function
+                                             target (diagonal-covariance (* reach *reach-gauss-share*)))
+                                    'reach-gauss 3)
+            (register-orientation-generator
+             costmap
+             (make-orientation-generator
+              (lambda (x y)
+                (let ((d (sqrt (+ (expt (- tx x) 2) (expt (- ty y) 2)))))
+                  (- (atan (- ty y) (- tx x))
+                     (if (> d (abs lateral)) (asin (/ lateral d)) 0d0))))
+              :samples samples :sample-step step))
+            (register-height-generator costmap (make-constant-height-function 0))
+            costmap))))))
+
+(defun supporting-items (x-min y-min x-max y-max top exclude &optional (world btr:*current-bullet-world*))
+  "Bounding rectangles (x0 y0 x1 y1) of the items standing on the surface, except EXCLUDE."
+  (loop for o in (btr:objects world)
+        when (and (typep o 'btr:item) (not (eq o exclude)))
+          append (multiple-value-bind (lo hi) (btr:aabb o)
+                   (when (and (< (abs (- (cl-transforms:z lo) top)) 0.05d0)
+                              (< (cl-transforms:x lo) x-max) (> (cl-transforms:x hi) x-min)
+                              (< (cl-transforms:y lo) y-max) (> (cl-transforms:y hi) y-min))
+                     (list (list (cl-transforms:x lo) (cl-transforms:y lo)
+                                 (cl-transforms:x hi) (cl-transforms:y hi)))))))
+
+(defun on-costmap (designator surface)
+  "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a
+margin (half the size of the FOR object, when given), away from the items already there; the
+height is the surface top, plus the FOR object's height of its origin above its bottom."
+  (let* ((for (desig:desig-prop-value designator :for))
+         (for-object (and for (typep for 'desig:object-designator)
+                          (object-designator-world-object for))))
+    (multiple-value-bind (x0 y0 x1 y1 top) (surface-of surface)
+      (let* ((costmap (make-location-costmap))
+             (margin (if for-object
+                         (multiple-value-bind (lo hi) (btr:aabb for-object)
+                           (* 0.5d0 (max (- (cl-transforms:x hi) (cl-transforms:x lo))
+                                         (- (cl-transforms:y hi) (cl-transforms:y lo)))))
+                         *surface-margin*))
+             (lift (if for-object
+                       (multiple-value-bind (lo) (btr:aabb for-object)
+                         (- (cl-transforms:z (cl-transforms:origin (btr:pose for-object)))
+                            (cl-transforms:z lo)))
+                       0d0))
+             (cx (/ (+ x0 x1) 2)) (cy (/ (+ y0 y1) 2))
+             (items (supporting-items x0 y0 x1 y1 top for-object)))
+        (register-cost-function costmap
+                                (make-rectangle-cost-function (min cx (+ x0 margin)) (min cy (+ y0 margin))
+                                                              (max cx (- x1 margin)) (max cy (- y1 margin)))
+                                'on-surface 0)
+        (when items
+          (register-cost-function
+           costmap
+           (lambda (x y)
+             (if (loop for (a b c d) in items
+                       thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
+                 0d0 1d0))
+           'on-free-space 5))
+        (register-height-generator costmap (make-constant-height-function (+ top lift)))
+        (register-orientation-generator costmap (make-identity-orientation-generator))
+        costmap))))
+
+;;; ---- the Prolog interface ------------------------------------------------------------------------
+
+(def-fact-group location-costmap-predicates (desig-costmap)
+  (<- (desig-costmap ?designator ?costmap)
+    (desig:loc-desig? ?designator)
+    (desig:desig-prop ?designator (:visible-for ?robot))
+    (lisp-fun visible-for-costmap ?designator ?robot ?costmap))
+  (<- (desig-costmap ?designator ?costmap)
+    (desig:loc-desig? ?designator)
+    (desig:desig-prop ?designator (:reachable-for ?robot))
+    (lisp-fun reachable-for-costmap ?designator ?robot ?costmap))
+  (<- (desig-costmap ?designator ?costmap)
+    (desig:loc-desig? ?designator)
+    (desig:desig-prop ?designator (:on ?surface))
+    (lisp-fun on-costmap ?designator ?surface ?costmap))
+
+  (<- (costmap ?costmap)
+    (-> (bound ?costmap)
+        (lisp-type ?costmap location-costmap)
+        (lisp-fun make-location-costmap ?costmap)))
+  (<- (costmap-add-function ?name ?function ?costmap)
+    (lisp-fun register-cost-function ?costmap ?function ?name ?_))
+  (<- (costmap-add-orientation-generator ?generator ?costmap)
+    (lisp-fun register-orientation-generator ?costmap ?generator ?_))
+  (<- (costmap-add-height-generator ?generator ?costmap)
+    (lisp-fun register-height-generator ?costmap ?generator ?_))
+  (<- (merged-desig-costmap ?designator ?costmap)
+    (lisp-fun designator-costmap ?designator ?costmap)
+    (lisp-pred identity ?costmap)))
+
+(rob-int::define-predicate-documentation
+  (desig-costmap "(desig-costmap ?designator ?costmap): a costmap for the location ?designator;
+every solution contributes and they are merged.  Extendable: add rules that build a costmap with
+(costmap ?cm) and (costmap-add-function ?name ?function ?cm).")
+  (costmap "(costmap ?cm): ?cm is a location costmap; a new one when ?cm is unbound.")
+  (costmap-add-function "(costmap-add-function ?name ?function ?cm): register a cost function.")
+  (costmap-add-orientation-generator "(costmap-add-orientation-generator ?generator ?cm).")
+  (costmap-add-height-generator "(costmap-add-height-generator ?generator ?cm).")
+  (merged-desig-costmap "(merged-desig-costmap ?designator ?cm): all DESIG-COSTMAP solutions of
+?designator merged into one costmap."))
+
+(defvar *designator-costmaps* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Location designator -> its merged costmap (or :NONE).")
+
+(defun designator-costmap (designator)
+  "The merged costmap of all DESIG-COSTMAP solutions of the location DESIGNATOR, or NIL when it
+has none; computed once per designator."
+  (let ((known (gethash designator *designator-costmaps*)))
+    (cond ((eq known :none) nil)
+          (known known)
+          (t (let* ((costmaps (remove nil (mapcar (lambda (b) (cut:var-value '?costmap b))
+                                                  (cut:force-ll
+                                                   (prolog `(desig-costmap ,designator ?costmap))))))
+                    (merged (and costmaps (merge-costmaps costmaps))))
+               (setf (gethash designator *designator-costmaps*) (or merged :none))
+               merged)))))
+
+(defun costmap-location-generator (designator)
+  "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged
+costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
+  (let ((costmap (designator-costmap designator)))
+    (if costmap (costmap-samples costmap) nil)))
+
+(desig:register-location-generator 20 costmap-location-generator
+  "Samples of the location costmap of the designator (DESIG-COSTMAP).")
+
+;;; ---- validators ------------------------------------------------------------------------------------
+
+(defstruct (robot-pose-request (:conc-name request-))
+  robot target object kind (sight-world nil))
+
+(defun request-line-of-sight-world (request)
+  "A copy of the belief state without the request's robot, made once per request."
+  (or (request-sight-world request)
+      (setf (request-sight-world request)
+            (let ((o (robot-world-object (request-robot request))))
+              (world-without (and o (list (btr:name o))))))))
+
+(defvar *designator-requests* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Location designator -> list of ROBOT-POSE-REQUESTs for its validators.")
+
+(defun designator-requests (designator)
+  (multiple-value-bind (known found) (gethash designator *designator-requests*)
+    (if found
+        known
+        (setf (gethash designator *designator-requests*)
+              (loop for (key kind) in '((:visible-for :visible) (:reachable-for :reachable))
+                    for robot = (desig:desig-prop-value designator key)
+                    when robot
+                      collect (let ((name (designator-robot-name robot)))
+                                (multiple-value-bind (target object) (designator-target designator)
+                                  (make-robot-pose-request :robot name :target target
+                                                           :object object :kind kind))))))))
+
+(defun candidate-pose (solution)
+  (typecase solution
+    (cl-transforms-stamped:pose-stamped
+     (and (map-frame-p (cl-transforms-stamped:frame-id solution))
+          (cl-transforms-stamped:pose-stamped->pose solution)))
+    (cl-transforms:pose solution)))
+
+(defun horizontal-distance (pose point)
+  (let ((o (cl-transforms:origin pose)))
+    (sqrt (+ (expt (- (cl-transforms:x o) (cl-transforms:x point)) 2)
+             (expt (- (cl-transforms:y o) (cl-transforms:y point)) 2)))))
+
+(defun robot-pose-distance-validator (designator solution)
+  "Location validator: rejects VISIBLE-FOR poses farther than VISIBILITY-COSTMAP-SIZE from the
+target and REACHABLE-FOR poses outside the reach ring."
+  (let ((requests (and (typep designator 'desig:location-designator) (designator-requests designator)))
+        (pose (candidate-pose solution)))
+    (if (or (null requests) (null pose))
+        :unknown
+        (loop for r in requests
+              for d = (horizontal-distance pose (request-target r))
+              unless (with-robot ((request-robot r))
+                       (ecase (request-kind r)
+                         (:visible (<= d (+ (metadata 'visibility-costmap-size) 1d-6)))
+                         (:reachable (<= (- (metadata 'costmap-reach-minimal-distance 0) 1d-6)
+                                         d (+ (metadata 'costmap-in-reach-distance) 1d-6)))))
+                return :reject
+              finally (return :unknown)))))
+
+(defun robot-pose-visibility-validator (designator solution)
+  "Location validator: rejects VISIBLE-FOR poses from which a ray at the robot's camera height
+does not reach the target (for an object: its centre, top and sides)."
+  (let ((requests (and (typep designator 'desig:location-designator) (designator-requests designator)))
+        (pose (candidate-pose solution)))
+    (if (or (null requests) (null pose))
+        :unknown
+        (loop for r in requests
+              when (eq (request-kind r) :visible)
+                do (let* ((o (cl-transforms:origin pose))
+                          (eye (cl-transforms:make-3d-vector
+                                (cl-transforms:x o) (cl-transforms:y o)
+                                (robot-camera-height (request-robot r)))))
+                     (unless (line-of-sight-p eye (view-target-points (request-target r) (request-object r))
+                                              (request-object r)
+                                              :world (request-line-of-sight-world r))
+                       (return :reject)))
+              finally (return :unknown)))))
+
+(defun robot-pose-collision-validator (designator solution)
+  "Location validator: rejects VISIBLE-FOR and REACHABLE-FOR base poses at which the robot,
+placed there in a copy of the belief state, touches anything but the floor and what it holds."
+  (let ((requests (and (typep designator 'desig:location-designator) (designator-requests designator)))
+        (pose (candidate-pose solution)))
+    (cond ((or (null requests) (null pose)) :unknown)
+          ((loop for robot in (remove-duplicates (mapcar #'request-robot requests))
+                 thereis (and (robot-world-object robot)
+                              (robot-pose-collisions (btr:name (robot-world-object robot)) pose)))
+           :reject)
+          (t :unknown))))
+
+(desig:register-location-validation-function 30 robot-pose-distance-validator
+  "VISIBLE-FOR / REACHABLE-FOR: distance of the base from the target.")
+(desig:register-location-validation-function 35 robot-pose-visibility-validator
+  "VISIBLE-FOR: line of sight from the camera height to the target.")
+(desig:register-location-validation-function 40 robot-pose-collision-validator
+  "VISIBLE-FOR / REACHABLE-FOR: the robot at the pose collides with nothing.")

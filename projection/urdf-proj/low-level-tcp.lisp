@@ -1,0 +1,187 @@
+;;;; MOVE-TCP: reach tool-frame poses with IK per arm, trying base offsets and torso heights,
+;;;; every candidate checked for collisions in the belief state.
+
+(in-package :cram-urdf-projection)
+
+(defparameter *base-offsets* '(0d0 -0.1d0 0.1d0 -0.2d0 0.2d0)
+  "Base x and y offsets (metres, base frame) MOVE-TCP tries, 0 first then by size.")
+
+(defparameter *torso-step* 0.1d0 "Step (metres or radians) of the torso values MOVE-TCP tries.")
+
+(defparameter *collision-modes* '(nil :avoid-all :allow-all :allow-hand :allow-fingers :allow-arm
+                                  :allow-attached)
+  "The collision modes of MOVE-TCP.")
+
+(defun arm-ik-chain (arm &optional (robot (robot-object)))
+  "The IK chain of ARM: from the parent link of its first arm joint (the torso) to the child
+link of its last arm joint (the wrist)."
+  (let* ((joints (cl-urdf:joints (btr:urdf robot)))
+         (names (arm-joint-names arm))
+         (first-joint (gethash (first names) joints))
+         (last-joint (gethash (car (last names)) joints)))
+    (unless (and first-joint last-joint)
+      (projection-error "Arm ~s joints ~s are not joints of ~s." arm names (btr:name robot)))
+    (ik-chain robot (cl-urdf:name (cl-urdf:parent first-joint)) (cl-urdf:name (cl-urdf:child last-joint)))))
+
+(defun arm-ik (arm ee-map-pose &key (robot (robot-object)) seed (max-restarts *ik-max-restarts*))
+  "Joint values (ARM-JOINTS order) putting the end-effector link of ARM at EE-MAP-POSE (map)
+for the robot's current base pose and torso, or NIL. Quick distance check before solving."
+  (let* ((chain (arm-ik-chain arm robot))
+         (base-pose (btr:link-pose robot (ik-chain-base-link chain)))
+         (ee (end-effector-link arm))
+         ;; the chain ends at the wrist; the end-effector link hangs below it
+         (tip-in-ee (relative-transform (btr:link-pose robot ee) (btr:link-pose robot (ik-chain-tip-link chain))))
+         (tip-goal (cl-transforms:transform* (cl-transforms:pose->transform ee-map-pose) tip-in-ee))
+         (goal (cl-transforms:transform->pose
+                (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
+                                          tip-goal)))
+         (first-joint-origin (nth-value 1 (joint-axis-and-origin robot (svref (ik-chain-joint-names chain) 0)))))
+    (when (> (cl-transforms:v-dist first-joint-origin (cl-transforms:translation tip-goal))
+             (+ (ik-chain-reach chain) 0.05d0))
+      (return-from arm-ik nil))
+    (solve-ik chain goal :seed (or seed (map 'list (lambda (j) (btr:joint-state robot j))
+                                             (ik-chain-joint-names chain)))
+                         :max-restarts max-restarts)))
+
+(defun check-collision-mode (mode)
+  (unless (member mode *collision-modes*)
+    (projection-error "Collision mode ~s: expected one of ~s." mode *collision-modes*))
+  mode)
+
+(defun perform-collision-check (collision-mode arms &optional (robot (robot-object)))
+  "True when the robot's state is acceptable under COLLISION-MODE for the moving ARMS:
+:ALLOW-ALL anything; NIL / :AVOID-ALL no contact of the robot with anything but its attached
+objects (which may touch only the robot); the lenient modes leave out the hands, fingers, arms
+or attached objects when *BE-STRICT-WITH-COLLISIONS* is true and allow everything otherwise."
+  (check-collision-mode collision-mode)
+  (flet ((clear-without (links) (null (robot-collisions :robot robot :ignore-links links))))
+    (case collision-mode
+      ((nil :avoid-all) (clear-without nil))
+      (:allow-all t)
+      (t (or (not *be-strict-with-collisions*)
+             (clear-without
+              (loop for arm in arms
+                    append (ecase collision-mode
+                             ((:allow-hand :allow-attached) (hand-links arm robot))
+                             (:allow-fingers
+                              (remove-if-not (lambda (l) (fact-value '?l `(rob-int:hand-finger-link ,(robot-name) ,arm ,l)))
+                                             (hand-links arm robot)))
+                             (:allow-arm (append (hand-links arm robot)
+                                                 (rob-int:get-arm-links (robot-name) arm)))))))))))
+
+(defun torso-candidates (robot fixed-torso)
+  "Torso values to try: the current one, then steps of *TORSO-STEP* within the limits by
+distance. NIL when the robot has no movable torso."
+  (let ((joint (torso-joint)))
+    (when (movable-joint-p robot joint)
+      (let ((current (btr:joint-state robot joint)))
+        (if fixed-torso
+            (list current)
+            (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
+              (let ((values (list current)))
+                (loop for k from 1 to 100
+                      for up = (+ current (* k *torso-step*))
+                      for down = (- current (* k *torso-step*))
+                      while (or (<= up (+ hi 1d-9)) (>= down (- lo 1d-9)))
+                      do (when (>= down (- lo 1d-9)) (push down values))
+                         (when (<= up (+ hi 1d-9)) (push up values)))
+                (dolist (limit (list lo hi))
+                  (unless (find limit values :test (lambda (a b) (< (abs (- a b)) 0.02d0)))
+                    (push limit values)))
+                (stable-sort (nreverse values) #'< :key (lambda (v) (abs (- v current)))))))))))
+
+(defun base-candidates (move-base)
+  (if move-base
+      (stable-sort (loop for x in *base-offsets* append (loop for y in *base-offsets* collect (list x y)))
+                   #'< :key (lambda (o) (+ (expt (first o) 2) (expt (second o) 2))))
+      (list (list 0d0 0d0))))
+
+(defun offset-base-pose (pose dx dy)
+  (cl-transforms:transform->pose
+   (cl-transforms:transform* (cl-transforms:pose->transform pose)
+                             (cl-transforms:make-transform (cl-transforms:make-3d-vector dx dy 0)
+                                                           (cl-transforms:make-identity-rotation)))))
+
+(defun tcp->ee-pose (arm tcp-map-pose robot)
+  (cl-transforms:transform->pose
+   (cl-transforms:transform* (cl-transforms:pose->transform tcp-map-pose)
+                             (cl-transforms:transform-inv (tcp-in-ee-transform arm robot)))))
+
+(defun reach-tcp-poses (goals collision-mode move-base fixed-torso)
+  "Bring each (arm . tcp-map-pose) of GOALS there at once. Tries base offsets and torso values
+in order; the first candidate with IK solutions for every arm that passes the collision check
+is kept. Signals MANIPULATION-POSE-UNREACHABLE (state restored) when none does, and
+MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
+  (let* ((robot (robot-object))
+         (arms (mapcar #'car goals))
+         (ee-goals (mapcar (lambda (g) (cons (car g) (tcp->ee-pose (car g) (cdr g) robot))) goals))
+         (base0 (btr:pose robot))
+         (torso (torso-joint))
+         (torsos (or (torso-candidates robot fixed-torso) (list nil)))
+         (state0 (btr:joint-states robot)))
+    (block search
+      (dolist (offset (base-candidates move-base))
+        (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
+        (dolist (torso-value torsos)
+          (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
+          (let ((solutions (loop for (arm . pose) in ee-goals
+                                 for q = (arm-ik arm pose :robot robot :max-restarts 8)
+                                 unless q do (return nil)
+                                 collect (mapcar #'list (coerce (ik-chain-joint-names (arm-ik-chain arm robot)) 'list) q))))
+            (when (and solutions (= (length solutions) (length ee-goals)))
+              (btr:set-robot-state-from-joints (apply #'append solutions) robot)
+              (if (perform-collision-check collision-mode arms robot)
+                  (return-from search t)
+                  (btr:set-robot-state-from-joints state0 robot))))))
+      (setf (btr:pose robot) base0)
+      (btr:set-robot-state-from-joints state0 robot)
+      (cpl:fail 'common-fail:manipulation-pose-unreachable
+                :description (format nil "Tool frame goals ~{~{~(~a~) ~a~}~^, ~}: unreachable for ~
+                                          the end effector or in collision."
+                                     (mapcar (lambda (g) (list (car g) (pose-summary (cdr g)))) goals))))
+    ;; final check: the tool frames are where they were asked to be
+    (loop for (arm . pose) in goals
+          for tool = (tool-frame arm)
+          for reached = (btr:link-pose robot (if (and tool (btr:link-exists-p robot tool)) tool (end-effector-link arm)))
+          for goal = (if (and tool (btr:link-exists-p robot tool)) pose (tcp->ee-pose arm pose robot))
+          do (multiple-value-bind (d a) (btr::pose-distance reached goal)
+               (when (or (> d (* 2 *ik-position-tolerance*)) (> a (* 2 *ik-rotation-tolerance*)))
+                 (cpl:fail 'common-fail:manipulation-goal-not-reached
+                           :description (format nil "The ~(~a~) tool frame ended ~,4f m and ~,4f rad away ~
+                                                     from its goal." arm d a)))))
+    t))
+
+(defun pose-list (poses what)
+  (cond ((null poses) nil)
+        ((or (typep poses 'cl-transforms-stamped:pose-stamped) (cl-transforms:pose-p poses))
+         (list (pose-in-map poses what)))
+        ((listp poses)
+         (if (and (= (length poses) 2) (every #'listp poses) (every #'realp (first poses)))
+             (list (pose-in-map poses what))
+             (mapcar (lambda (p) (pose-in-map p what)) poses)))
+        (t (projection-error "~a ~s: expected a pose, a pose-stamped or a list of them." what poses))))
+
+(defun move-tcp (left-poses right-poses &key collision-mode (move-base t) fixed-torso)
+  "Move the tool frames of the arms to LEFT-POSES and RIGHT-POSES (each a pose-stamped, a map
+pose, or a list of them, aligned by index; NIL: that arm stays). For each step the IK of the
+wrist (tool frame converted through the TCP-IN-EE pose) is solved in the torso frame, trying
+base offsets (unless MOVE-BASE is NIL) and torso values (unless FIXED-TORSO), each candidate
+checked under COLLISION-MODE. Failures of all but the last step are logged and skipped; the
+last step's MANIPULATION-LOW-LEVEL-FAILURE propagates."
+  (check-collision-mode collision-mode)
+  (let* ((lefts (pose-list left-poses "left TCP pose"))
+         (rights (pose-list right-poses "right TCP pose"))
+         (steps (max (length lefts) (length rights))))
+    (when lefts (check-arm :left))
+    (when rights (check-arm :right))
+    (with-motion ("moving-tcp")
+      (dotimes (i steps t)
+        (let ((goals (append (let ((p (nth i lefts))) (and p (list (cons :left p))))
+                             (let ((p (nth i rights))) (and p (list (cons :right p)))))))
+          (when goals
+            (if (= i (1- steps))
+                (reach-tcp-poses goals collision-mode move-base fixed-torso)
+                (handler-case (reach-tcp-poses goals collision-mode move-base fixed-torso)
+                  (common-fail:manipulation-low-level-failure (failure)
+                    (cpl:log-message :warn '(urdf-proj move-tcp) "Skipping intermediate pose ~d: ~a"
+                                     i failure))))))))))

@@ -1,0 +1,280 @@
+;;;; CRAM-MANIPULATION-INTERFACES (MAN-INT): what plans ask about objects they manipulate —
+;;;; the grasps an object type offers, the gripper poses of a grasp, gripper opening and
+;;;; effort — and the trajectory segments of picking up and placing.
+;;;; CRAM-OBJECT-KNOWLEDGE (OBJECTS) fills these tables for household objects.
+
+(defpackage :cram-manipulation-interfaces
+  (:nicknames :man-int)
+  (:use :cl)
+  (:export
+   ;; object types
+   #:object-type-direct-subtype #:object-type-subtype-p #:object-type-supertypes
+   #:define-object-type #:known-object-types
+   ;; grasps
+   #:def-object-type-to-gripper-transforms #:grasp-spec #:get-action-grasps
+   #:object-type-grasps #:get-object-type-to-gripper-transform
+   #:get-object-type-to-gripper-pregrasp-transforms
+   #:get-object-type-to-gripper-lift-offsets
+   #:get-object-type-gripping-effort #:get-object-type-gripper-opening
+   #:define-object-type-gripping #:object-rotationally-symmetric-p
+   #:manipulation-knowledge-error
+   ;; trajectories
+   #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
+   #:get-action-trajectory #:get-traj-poses-by-label
+   #:grasp-pose #:transform-pose-by))
+
+(in-package :cram-manipulation-interfaces)
+
+(define-condition manipulation-knowledge-error (simple-error) ()
+  (:documentation "Bad input to, or missing knowledge behind, a manipulation interface call."))
+
+(defun knowledge-error (control &rest arguments)
+  (error 'manipulation-knowledge-error :format-control control :format-arguments arguments))
+
+;;; ---- object types --------------------------------------------------------------------------
+
+(defvar *object-type-parents* (make-hash-table :test 'eq)
+  "Object type keyword -> list of its direct supertypes.")
+
+(defmacro define-object-type (type &rest supertypes)
+  "Declare the object type TYPE (a keyword) with its direct SUPERTYPES (keywords)."
+  (check-type type keyword)
+  (dolist (s supertypes) (check-type s keyword))
+  `(progn (setf (gethash ,type *object-type-parents*) ',supertypes) ,type))
+
+(defun known-object-types ()
+  "Every declared object type, sorted."
+  (sort (loop for k being the hash-keys of *object-type-parents* collect k) #'string<))
+
+(defun object-type-direct-subtype (type subtype)
+  "True when SUBTYPE was declared with TYPE as a direct supertype."
+  (and (member type (gethash subtype *object-type-parents*)) t))
+
+(defun object-type-supertypes (type)
+  "TYPE followed by all its supertypes, nearest first."
+  (let ((result '()) (queue (list type)))
+    (loop while queue
+          do (let ((next (pop queue)))
+               (unless (member next result)
+                 (push next result)
+                 (setf queue (append queue (gethash next *object-type-parents*))))))
+    (nreverse result)))
+
+(defun object-type-subtype-p (type subtype)
+  "True when SUBTYPE is TYPE or one of its (transitive) subtypes."
+  (and (member type (object-type-supertypes subtype)) t))
+
+;;; ---- gripping knowledge ----------------------------------------------------------------------
+
+(defstruct (gripping (:constructor make-gripping (effort opening symmetric)))
+  effort opening symmetric)
+
+(defvar *gripping* (make-hash-table :test 'eq)
+  "Object type -> GRIPPING (effort, opening in metres, rotational symmetry about z).")
+
+(defmacro define-object-type-gripping (type &key (effort 50) (opening 0.1) rotationally-symmetric)
+  "Declare how to grip objects of TYPE: the gripping EFFORT, the gripper OPENING (metres) and
+whether the object looks the same after any rotation about its z axis."
+  (check-type type keyword)
+  `(progn (setf (gethash ,type *gripping*)
+                (make-gripping ,effort ,opening ,rotationally-symmetric))
+          ,type))
+
+(defun lookup-inherited (table type what)
+  (or (some (lambda (x) (gethash x table)) (object-type-supertypes type))
+      (knowledge-error "No ~a known for the object type ~s (known types: ~{~s~^, ~})."
+                       what type (known-object-types))))
+
+(defun check-type-keyword (type what)
+  (unless (keywordp type)
+    (knowledge-error "~a: expected an object type keyword such as :BOTTLE, got ~s." what type)))
+
+(defun get-object-type-gripping-effort (object-type)
+  "The gripping effort for objects of OBJECT-TYPE (inherited from supertypes)."
+  (check-type-keyword object-type 'get-object-type-gripping-effort)
+  (gripping-effort (lookup-inherited *gripping* object-type "gripping effort")))
+
+(defun get-object-type-gripper-opening (object-type)
+  "The gripper opening (metres) before grasping objects of OBJECT-TYPE."
+  (check-type-keyword object-type 'get-object-type-gripper-opening)
+  (gripping-opening (lookup-inherited *gripping* object-type "gripper opening")))
+
+(defun object-rotationally-symmetric-p (object-type)
+  "True when objects of OBJECT-TYPE look the same after any rotation about their z axis."
+  (check-type-keyword object-type 'object-rotationally-symmetric-p)
+  (let ((g (some (lambda (x) (gethash x *gripping*)) (object-type-supertypes object-type))))
+    (and g (gripping-symmetric g))))
+
+;;; ---- grasps ----------------------------------------------------------------------------------
+
+(defstruct (grasp-spec (:constructor %make-grasp-spec))
+  "One grasp of an object type: the TCP pose in the object frame, the approach direction
+(unit vector in the object frame along which the gripper moves onto the object), the arms
+that may use it, the pregrasp offsets and the lift height."
+  grasp arms translation rotation approach
+  (pregrasp-back 0.15d0) (pregrasp-up 0.07d0) (lift 0.07d0))
+
+(defvar *grasps* (make-hash-table :test 'eq)
+  "Object type -> list of GRASP-SPEC in preference order.")
+
+(defun d (x) (coerce x 'double-float))
+
+(defun vec (list)
+  (destructuring-bind (x y z) list (cl-transforms:make-3d-vector (d x) (d y) (d z))))
+
+(defmacro def-object-type-to-gripper-transforms (object-types arms grasp
+                                                 &key grasp-translation grasp-rotation
+                                                   approach (pregrasp-back 0.15)
+                                                   (pregrasp-up 0.07) (lift 0.07))
+  "Declare the GRASP (a keyword such as :LEFT-SIDE) of OBJECT-TYPES (a keyword or a list) for
+ARMS (a list of arm keywords, or :ALL). GRASP-TRANSLATION (x y z) and GRASP-ROTATION (a
+quaternion (x y z w)) give the tool frame in the object frame; APPROACH (x y z) the
+direction in the object frame along which the gripper moves onto the object. Pregrasp poses
+lie PREGRASP-BACK metres back against the approach (the first also PREGRASP-UP higher);
+lifting raises twice by LIFT metres."
+  (let ((types (if (listp object-types) object-types (list object-types))))
+    (dolist (type types) (check-type type keyword))
+    (check-type grasp keyword)
+    `(progn
+       ,@(loop for type in types
+               collect `(register-grasp ,type ,grasp ',arms ',grasp-translation ',grasp-rotation
+                                        ',approach ,pregrasp-back ,pregrasp-up ,lift))
+       ',grasp)))
+
+(defun register-grasp (type grasp arms translation rotation approach back up lift)
+  (unless (and (listp translation) (= 3 (length translation)) (every #'realp translation))
+    (knowledge-error "Grasp ~s of ~s: expected a translation (x y z), got ~s." grasp type translation))
+  (unless (and (listp rotation) (= 4 (length rotation)) (every #'realp rotation))
+    (knowledge-error "Grasp ~s of ~s: expected a quaternion (x y z w), got ~s." grasp type rotation))
+  (unless (and (listp approach) (= 3 (length approach)) (every #'realp approach))
+    (knowledge-error "Grasp ~s of ~s: expected an approach direction (x y z), got ~s." grasp type approach))
+  (let ((spec (%make-grasp-spec
+               :grasp grasp :arms arms :translation (vec translation)
+               :rotation (cl-transforms:normalize
+                          (apply #'cl-transforms:make-quaternion (mapcar #'d rotation)))
+               :approach (cl-transforms:normalize-vector (vec approach))
+               :pregrasp-back (d back) :pregrasp-up (d up) :lift (d lift))))
+    (setf (gethash type *grasps*)
+          (append (remove grasp (gethash type *grasps*) :key #'grasp-spec-grasp)
+                  (list spec)))
+    grasp))
+
+(defun type-grasp-specs (object-type)
+  (or (some (lambda (x) (gethash x *grasps*)) (object-type-supertypes object-type))
+      (knowledge-error "No grasps known for the object type ~s (types with grasps: ~{~s~^, ~})."
+                       object-type
+                       (sort (loop for k being the hash-keys of *grasps* collect k) #'string<))))
+
+(defun object-type-grasps (object-type &optional arm)
+  "The grasp keywords OBJECT-TYPE offers (for ARM, when given), in preference order."
+  (check-type-keyword object-type 'object-type-grasps)
+  (loop for spec in (type-grasp-specs object-type)
+        when (or (null arm) (eq (grasp-spec-arms spec) :all) (member arm (grasp-spec-arms spec)))
+          collect (grasp-spec-grasp spec)))
+
+(defun find-grasp-spec (object-type grasp)
+  (check-type-keyword object-type 'find-grasp-spec)
+  (or (find grasp (type-grasp-specs object-type) :key #'grasp-spec-grasp)
+      (knowledge-error "The object type ~s has no grasp ~s: expected one of ~{~s~^, ~}."
+                       object-type grasp (object-type-grasps object-type))))
+
+(defun get-action-grasps (object-type arm &optional object-transform-in-base)
+  "The grasps to try for OBJECT-TYPE with ARM. With OBJECT-TRANSFORM-IN-BASE (the object's
+pose relative to the robot base, a transform or pose) grasps whose gripper would point
+towards the robot come last, the others ordered by how well they face away from the robot."
+  (let ((grasps (object-type-grasps object-type arm)))
+    (if (null object-transform-in-base)
+        grasps
+        (let* ((q (cl-transforms:rotation (ensure-transform object-transform-in-base)))
+               (scored (loop for g in grasps
+                             for spec = (find-grasp-spec object-type g)
+                             for a = (cl-transforms:rotate q (grasp-spec-approach spec))
+                             ;; approach along +x of the base: pushing away from the robot
+                             collect (cons g (cl-transforms:x a)))))
+          (mapcar #'car (stable-sort scored #'> :key #'cdr))))))
+
+(defun ensure-transform (x)
+  (etypecase x
+    (cl-transforms:transform x)
+    (cl-transforms:pose (cl-transforms:pose->transform x))))
+
+(defun get-object-type-to-gripper-transform (object-type object-name arm grasp)
+  "The tool frame of ARM grasping an OBJECT-TYPE object with GRASP, as a transform in the
+object frame. OBJECT-NAME is accepted for per-object knowledge and not used otherwise."
+  (declare (ignore object-name arm))
+  (let ((spec (find-grasp-spec object-type grasp)))
+    (cl-transforms:make-transform (grasp-spec-translation spec) (grasp-spec-rotation spec))))
+
+(defun get-object-type-to-gripper-pregrasp-transforms (object-type object-name arm grasp
+                                                       &optional grasp-transform)
+  "The two pregrasp tool frames (object frame) of GRASP: back against the approach and up,
+then back at the grasp height."
+  (let* ((spec (find-grasp-spec object-type grasp))
+         (g (or grasp-transform
+                (get-object-type-to-gripper-transform object-type object-name arm grasp)))
+         (back (cl-transforms:v* (grasp-spec-approach spec) (- (grasp-spec-pregrasp-back spec))))
+         (up (cl-transforms:make-3d-vector 0 0 (grasp-spec-pregrasp-up spec))))
+    (list (offset-transform g (cl-transforms:v+ back up))
+          (offset-transform g back))))
+
+(defun get-object-type-to-gripper-lift-offsets (object-type grasp)
+  "The heights (metres, world z) of the two lift poses above the grasp pose."
+  (let ((lift (grasp-spec-lift (find-grasp-spec object-type grasp))))
+    (list lift (* 2 lift))))
+
+(defun offset-transform (transform offset)
+  (cl-transforms:make-transform (cl-transforms:v+ (cl-transforms:translation transform) offset)
+                                (cl-transforms:rotation transform)))
+
+;;; ---- trajectories ----------------------------------------------------------------------------
+
+(defstruct (traj-segment (:constructor make-traj-segment (label poses)))
+  "A labelled list of tool-frame poses (in the fixed frame) an arm moves through."
+  label poses)
+
+(defun transform-pose-by (pose transform)
+  "POSE (the object's pose in the fixed frame) composed with TRANSFORM (in the object frame):
+the resulting pose in the fixed frame."
+  (cl-transforms:transform->pose
+   (cl-transforms:transform* (cl-transforms:pose->transform pose) transform)))
+
+(defun raise-pose (pose dz)
+  (cl-transforms:make-pose (cl-transforms:v+ (cl-transforms:origin pose)
+                                             (cl-transforms:make-3d-vector 0 0 dz))
+                           (cl-transforms:orientation pose)))
+
+(defun grasp-pose (object-type object-pose arm grasp)
+  "The tool frame pose (fixed frame) for grasping an OBJECT-TYPE object at OBJECT-POSE."
+  (transform-pose-by object-pose (get-object-type-to-gripper-transform object-type nil arm grasp)))
+
+(defun get-action-trajectory (action-type arm grasp object-type object-pose
+                              &key object-to-gripper)
+  "The trajectory segments of ACTION-TYPE (:PICKING-UP or :PLACING) for ARM with GRASP on an
+OBJECT-TYPE object whose pose (fixed frame) is OBJECT-POSE — for placing, the pose the
+object shall have. OBJECT-TO-GRIPPER (a transform in the object frame) replaces the grasp
+knowledge, e.g. the actual hold of an object in hand.
+Picking up: :REACHING (two pregrasp poses), :GRASPING, :LIFTING (two poses).
+Placing: :REACHING (the lift poses from above), :PUTTING, :RETRACTING (pregrasp poses)."
+  (let* ((g (or object-to-gripper
+                (get-object-type-to-gripper-transform object-type nil arm grasp)))
+         (grasp-pose (transform-pose-by object-pose g))
+         (pregrasps (mapcar (lambda (tr) (transform-pose-by object-pose tr))
+                            (get-object-type-to-gripper-pregrasp-transforms
+                             object-type nil arm grasp g)))
+         (lifts (mapcar (lambda (dz) (raise-pose grasp-pose dz))
+                        (get-object-type-to-gripper-lift-offsets object-type grasp))))
+    (ecase action-type
+      (:picking-up (list (make-traj-segment :reaching pregrasps)
+                         (make-traj-segment :grasping (list grasp-pose))
+                         (make-traj-segment :lifting lifts)))
+      (:placing (list (make-traj-segment :reaching (reverse lifts))
+                      (make-traj-segment :putting (list grasp-pose))
+                      (make-traj-segment :retracting (reverse pregrasps)))))))
+
+(defun get-traj-poses-by-label (trajectory label)
+  "The poses of the segment LABEL of TRAJECTORY (a list of TRAJ-SEGMENT)."
+  (let ((segment (find label trajectory :key #'traj-segment-label)))
+    (unless segment
+      (knowledge-error "The trajectory has no segment ~s: it has ~{~s~^, ~}."
+                       label (mapcar #'traj-segment-label trajectory)))
+    (traj-segment-poses segment)))

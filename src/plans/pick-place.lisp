@@ -1,0 +1,266 @@
+;;;; Picking up and placing: groundings (arms x grasps as lazy alternatives, trajectories from
+;;;; MAN-INT) and the plans, logging each step in CRAM's words.
+
+(in-package :cram-mobile-pick-place-plans)
+
+;;; ---- helpers over the belief state --------------------------------------------------------------
+
+(defun tool-frame (arm)
+  (or (rob-int::first-solution-value
+       '?frame `(rob-int:robot-tool-frame ,(current-robot-name) ,arm ?frame))
+      (pp-error "The robot ~s has no tool frame for the arm ~s." (current-robot-name) arm)))
+
+(defun end-effector-link (arm)
+  (rob-int::first-solution-value
+   '?link `(rob-int:end-effector-link ,(current-robot-name) ,arm ?link)))
+
+(defun tool-pose-in-map (arm)
+  (btr:link-pose (btr:get-robot-object) (tool-frame arm)))
+
+(defun arms-holding (object-name)
+  "The arms whose end-effector carries the object OBJECT-NAME in the belief state."
+  (let ((robot (btr:get-robot-object)))
+    (when robot
+      (let ((links (btr:object-attached robot object-name)))
+        (loop for arm in (robot-arms)
+              when (member (end-effector-link arm) links :test #'equal)
+                collect arm)))))
+
+(defun free-arms ()
+  "The arms whose end-effector carries nothing."
+  (let ((robot (btr:get-robot-object)))
+    (if robot
+        (let ((busy (mapcar #'second (btr:attached-objects robot))))
+          (remove-if (lambda (arm) (member (end-effector-link arm) busy :test #'equal))
+                     (robot-arms)))
+        (robot-arms))))
+
+(defun relative-transform (from-pose to-pose)
+  "TO-POSE expressed in the frame of FROM-POSE, as a transform."
+  (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform from-pose))
+                            (cl-transforms:pose->transform to-pose)))
+
+(defun support-height-below (x y z &key (ignore '()))
+  "The highest top (z) of an environment link or item below height Z whose bounding box covers
+(X, Y), or NIL."
+  (let ((best nil))
+    (flet ((consider (lo hi)
+             (when (and (<= (cl-transforms:x lo) x (cl-transforms:x hi))
+                        (<= (cl-transforms:y lo) y (cl-transforms:y hi))
+                        (<= (cl-transforms:z hi) (+ z 1d-3)))
+               (setf best (max (or best most-negative-double-float) (cl-transforms:z hi))))))
+      (let ((env (btr:get-environment-object)))
+        (when env
+          (dotimes (i (length (btr:link-names env)))
+            (multiple-value-bind (lo hi) (ignore-errors (btr:aabb env i))
+              (when lo (consider lo hi))))))
+      (dolist (o (btr:objects))
+        (when (and (typep o 'btr:item) (not (member (btr:name o) ignore)))
+          (multiple-value-bind (lo hi) (btr:aabb o) (consider lo hi)))))
+    best))
+
+;;; ---- picking up --------------------------------------------------------------------------------
+
+(defun picking-up-groundings (d)
+  (let* ((object (prop d :object))
+         (name (object-designator-name object))
+         (type (object-designator-type object))
+         (arms (let ((arm (prop d :arm)))
+                 (cond ((and arm (listp arm)) (arm-list arm))
+                       (arm (list (check-arm arm)))
+                       (t (or (free-arms) (pp-error "No free arm to pick up ~s." name))))))
+         (object-pose (object-pose-in-map object))
+         (in-base (relative-transform (robot-pose-in-map) object-pose))
+         (opening (man-int:get-object-type-gripper-opening type))
+         (effort (man-int:get-object-type-gripping-effort type)))
+    (loop for arm in arms
+          nconc (loop for grasp in (let ((g (prop d :grasp)))
+                                     (if g
+                                         (progn (man-int:get-object-type-to-gripper-transform
+                                                 type name arm g)
+                                                (list g))
+                                         (man-int:get-action-grasps type arm in-base)))
+                      for trajectory = (man-int:get-action-trajectory
+                                        :picking-up arm grasp type object-pose)
+                      collect (resolved 'pick-up :picking-up
+                                        `((:arm ,arm) (:grasp ,grasp) (:object ,object)
+                                          (:gripper-opening ,opening) (:effort ,effort)
+                                          (:trajectory ,trajectory)
+                                          (:look-pose ,(map-stamped object-pose))))))))
+
+(def-action-grounding :picking-up (d)
+  (unless (typep (prop d :object) 'desig:object-designator)
+    (pp-error "The picking-up action ~s needs an OBJECT designator, got ~s." d (prop d :object)))
+  (picking-up-groundings d))
+
+(defun arm-poses (arm poses)
+  (ecase arm
+    (:left (values poses nil))
+    (:right (values nil poses))))
+
+(defun perform-arm-action (?type arm poses &key ignore-failures (log-tag 'pick-up))
+  (multiple-value-bind (?left ?right) (arm-poses arm poses)
+    (flet ((run ()
+             (exe:perform (desig:an action (type ?type)
+                                    (desig:when ?left (left-poses ?left))
+                                    (desig:when ?right (right-poses ?right))))))
+      (if ignore-failures
+          (handler-case (run)
+            (common-fail:manipulation-low-level-failure (e)
+              (cpl:log-message :warn `(pick-place ,log-tag) "~a~%Ignoring." e)))
+          (run)))))
+
+(defun log-pp (tag control &rest arguments)
+  (apply #'cpl:log-message :info `(pick-place ,tag) control arguments))
+
+(defun pick-up (&key arm grasp object gripper-opening effort trajectory look-pose
+                &allow-other-keys)
+  "Pick up OBJECT with ARM using GRASP along TRAJECTORY (MAN-INT segments :REACHING,
+:GRASPING, :LIFTING): look, open the gripper while reaching, grasp, grip (recording the grasp
+in the belief), lift and park the arm. Failures of reaching, grasping and lifting are logged
+and ignored; a failed grip propagates (e.g. COMMON-FAIL:GRIPPER-CLOSED-COMPLETELY)."
+  (let ((?look-pose look-pose) (?arm arm) (?opening gripper-opening)
+        (?object object) (?grasp grasp) (?effort effort))
+    (log-pp 'pick-up "Looking")
+    (handler-case
+        (exe:perform (desig:an action (type looking)
+                               (target (desig:a location (pose ?look-pose)))))
+      (common-fail:ptu-low-level-failure (e)
+        (cpl:log-message :warn '(pick-place pick-up) "~a~%Ignoring." e)))
+    (log-pp 'pick-up "Opening gripper and reaching")
+    (cpl:par
+      (exe:perform (desig:an action (type setting-gripper) (gripper ?arm) (position ?opening)))
+      (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
+                          :ignore-failures t))
+    (log-pp 'pick-up "Grasping")
+    (perform-arm-action :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)
+                        :ignore-failures t)
+    (log-pp 'pick-up "Gripping")
+    (exe:perform (desig:an action (type gripping) (arm ?arm) (object ?object)
+                           (grasp ?grasp) (effort ?effort)))
+    (log-pp 'pick-up "Lifting")
+    (perform-arm-action :lifting arm (man-int:get-traj-poses-by-label trajectory :lifting)
+                        :ignore-failures t)
+    (log-pp 'pick-up "Parking")
+    (exe:perform (desig:an action (type parking-arms) (arms (?arm))))
+    object))
+
+;;; ---- placing ------------------------------------------------------------------------------------
+
+(defun placing-target-pose (object type target)
+  "The object pose (fixed frame) for placing OBJECT at TARGET: a rotationally symmetric object
+keeps its orientation in hand; an object whose bottom would sink into the surface below the
+target is raised to rest on it."
+  (let* ((name (object-designator-name object))
+         (current (object-pose-in-map object))
+         (goal (pose-in-map (location-pose target)))
+         (goal (if (man-int:object-rotationally-symmetric-p type)
+                   (cl-transforms:make-pose (cl-transforms:origin goal)
+                                            (cl-transforms:orientation current))
+                   goal))
+         (o (btr:object btr:*current-bullet-world* name)))
+    (if (null o)
+        goal
+        (let* ((bottom-offset (- (cl-transforms:z (cl-transforms:origin current))
+                                 (cl-transforms:z (btr:aabb o))))
+               (gx (cl-transforms:x (cl-transforms:origin goal)))
+               (gy (cl-transforms:y (cl-transforms:origin goal)))
+               (gz (cl-transforms:z (cl-transforms:origin goal)))
+               (bottom (- gz bottom-offset))
+               (support (support-height-below gx gy (+ bottom 0.1d0) :ignore (list name))))
+          (if (and support (< bottom support))
+              (cl-transforms:make-pose
+               (cl-transforms:make-3d-vector gx gy (+ support bottom-offset 0.002d0))
+               (cl-transforms:orientation goal))
+              goal)))))
+
+(defun placing-groundings (d)
+  (let* ((object (prop d :object))
+         (target (prop d :target))
+         (name (object-designator-name object))
+         (type (object-designator-type object))
+         (holding (arms-holding name))
+         (arm (let ((arm (prop d :arm)))
+                (cond ((and arm (listp arm)) (check-arm (first arm)))
+                      (arm (check-arm arm))
+                      (holding (first holding))
+                      (t (pp-error "The placing action ~s: no ARM given and no arm holds ~s."
+                                   d name)))))
+         (grasp (or (prop d :grasp) (first (man-int:object-type-grasps type arm))))
+         (target-pose (placing-target-pose object type target))
+         (hold (relative-transform (object-pose-in-map object) (tool-pose-in-map arm)))
+         (trajectory (man-int:get-action-trajectory :placing arm grasp type target-pose
+                                                    :object-to-gripper hold)))
+    (list (resolved 'place :placing
+                    `((:arm ,arm) (:grasp ,grasp) (:object ,object) (:target ,target)
+                      (:target-pose ,(map-stamped target-pose))
+                      (:trajectory ,trajectory))))))
+
+(def-action-grounding :placing (d)
+  (unless (typep (prop d :object) 'desig:object-designator)
+    (pp-error "The placing action ~s needs the OBJECT designator in hand, got ~s."
+              d (prop d :object)))
+  (unless (prop d :target)
+    (pp-error "The placing action ~s needs a TARGET location designator." d))
+  (placing-groundings d))
+
+(defun place (&key arm object target target-pose trajectory &allow-other-keys)
+  "Put OBJECT held by ARM at TARGET-POSE along TRAJECTORY (:REACHING, :PUTTING, :RETRACTING):
+look, reach and put (failures propagate), open the gripper, record the release and the new
+location in the belief, retract (failures ignored) and park the arm."
+  (let ((?target-pose target-pose) (?arm arm))
+    (log-pp 'place "Looking")
+    (handler-case
+        (exe:perform (desig:an action (type looking)
+                               (target (desig:a location (pose ?target-pose)))))
+      (common-fail:ptu-low-level-failure (e)
+        (cpl:log-message :warn '(pick-place place) "~a~%Ignoring." e)))
+    (log-pp 'place "Reaching")
+    (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
+                        :log-tag 'place)
+    (log-pp 'place "Putting")
+    (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
+                        :log-tag 'place)
+    (log-pp 'place "Opening gripper")
+    (exe:perform (desig:an action (type releasing) (gripper ?arm)))
+    (log-pp 'place "Retract grasp in knowledge base")
+    (coe:on-event (make-instance 'cpoe:object-detached-robot
+                                 :arm arm :object-name (object-designator-name object)
+                                 :object-designator object))
+    (log-pp 'place "Updating object location in knowledge base")
+    (coe:on-event (make-instance 'cpoe:object-location-changed
+                                 :object-designator object
+                                 :location-designator (and (typep target 'desig:designator)
+                                                           target)))
+    (log-pp 'place "Retracting")
+    (perform-arm-action :retracting arm (man-int:get-traj-poses-by-label trajectory :retracting)
+                        :ignore-failures t :log-tag 'place)
+    (log-pp 'place "Parking")
+    (exe:perform (desig:an action (type parking-arms) (arms (?arm))))
+    object))
+
+;;; ---- getting into reach ---------------------------------------------------------------------
+
+(defparameter *reach-forward* 0.6d0
+  "Metres in front of the base at which DRIVE-TOWARDS-OBJECT-PLAN puts the object.")
+(defparameter *reach-sideways* 0.15d0
+  "Metres towards the arm's side at which DRIVE-TOWARDS-OBJECT-PLAN puts the object.")
+
+(defun drive-towards-object-plan (object &key (arm :right) &allow-other-keys)
+  "Drive, keeping the robot's heading, so that OBJECT lies *REACH-FORWARD* metres ahead and
+*REACH-SIDEWAYS* metres towards ARM's side of the base."
+  (check-arm arm)
+  (let* ((robot (robot-pose-in-map))
+         (q (cl-transforms:orientation robot))
+         (object-position (cl-transforms:origin (object-pose-in-map object)))
+         (offset (cl-transforms:rotate
+                  q (cl-transforms:make-3d-vector *reach-forward*
+                                                  (if (eq arm :left) *reach-sideways*
+                                                      (- *reach-sideways*))
+                                                  0)))
+         (goal (cl-transforms:v- object-position offset))
+         (?pose (cl-transforms-stamped:make-pose-stamped
+                 cram-tf:*fixed-frame* 0d0
+                 (cl-transforms:make-3d-vector (cl-transforms:x goal) (cl-transforms:y goal) 0)
+                 q)))
+    (exe:perform (desig:an action (type going) (target (desig:a location (pose ?pose)))))))

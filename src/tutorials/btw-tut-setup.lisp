@@ -1,0 +1,116 @@
+;;;; Package CRAM-BULLET-WORLD-TUTORIAL (BTW-TUT): the Bullet world tutorials' setup — the
+;;;; kitchen, the PR2 and the tutorial meshes in a fresh belief state, with or without ROS.
+
+(defpackage :cram-bullet-world-tutorial
+  (:nicknames :btw-tut)
+  (:use :cl :cram-prolog)
+  (:export #:init-projection #:add-objects-to-mesh-list #:get-kitchen-urdf #:get-robot-urdf
+           #:move-kitchen-joint #:spawn-bottle #:move-bottle #:find-object #:pick-up-object
+           #:get-preferred-arm-for-direction #:*base-pose-near-table* #:*base-pose-near-counter*
+           #:*final-object-destination* #:*downward-look-coordinate*
+           #:*left-downward-look-coordinate* #:*right-downward-look-coordinate*
+           #:*bottle-pose-in-view* #:*bottle-pose-out-of-view* #:*bottle-pose-hard-to-grasp*
+           #:spawn-two-bottles #:test-switch-two-bottles #:navigate-to #:look-at
+           #:get-perceived-bottle-desig #:pick-up #:place-down #:move-to-reach
+           #:move-arm-out-of-sight #:*pose-bottle-1* #:*pose-bottle-2* #:*pose-meal-table*
+           #:*pose-counter* #:*robot-parameter* #:*kitchen-parameter*))
+
+(in-package :cram-bullet-world-tutorial)
+
+(defparameter *robot-parameter* "robot_description"
+  "The ROS parameter holding the robot URDF.")
+(defparameter *kitchen-parameter* "kitchen_description"
+  "The ROS parameter holding the kitchen URDF.")
+
+(defvar *robot-urdf* nil "The parsed robot URDF, read once.")
+(defvar *kitchen-urdf* nil "The parsed kitchen URDF, read once.")
+
+(defun project-directory ()
+  (asdf:system-source-directory "cram-bullet-world-tutorial"))
+
+(defun ros-parameter-string (name)
+  "The value of the ROS parameter NAME when a ROS node is running and it is set, else NIL."
+  (let* ((package (find-package :roslisp-utilities))
+         (running (and package (find-symbol "ROS-RUNNING-P" package)))
+         (reader (and package (find-symbol "ROBOT-DESCRIPTION-STRING" package))))
+    (when (and running reader (fboundp running) (fboundp reader) (funcall running))
+      (ignore-errors (funcall reader name)))))
+
+(defun read-urdf (parameter relative-path)
+  (cl-urdf:parse-urdf
+   (or (ros-parameter-string parameter)
+       (uiop:read-file-string (merge-pathnames relative-path (project-directory))))))
+
+(defun get-robot-urdf ()
+  "The PR2 URDF: from the parameter *ROBOT-PARAMETER* under ROS, else robots/pr2/pr2.urdf."
+  (or *robot-urdf* (setf *robot-urdf* (read-urdf *robot-parameter* "robots/pr2/pr2.urdf"))))
+
+(defun get-kitchen-urdf ()
+  "The kitchen URDF: from *KITCHEN-PARAMETER* under ROS, else resources/iai_kitchen.urdf."
+  (or *kitchen-urdf*
+      (setf *kitchen-urdf* (read-urdf *kitchen-parameter* "resources/iai_kitchen.urdf"))))
+
+(defun add-objects-to-mesh-list (&optional (ros-package "cram_plans_resources"))
+  "Make the tutorial meshes (:bottle, :cup, :fork-plastic ...) known as mesh keywords."
+  (btr:add-objects-to-mesh-list ros-package :directory "meshes"))
+
+(defun robot-park-joint-states (robot-name)
+  (loop for arm in '(:left :right)
+        append (ignore-errors (rob-int:get-robot-joint-states robot-name :arm arm :park))))
+
+(defun fresh-world ()
+  (let ((old btr:*current-bullet-world*))
+    (setf btr:*current-bullet-world* (make-instance 'btr:bt-reasoning-world))
+    (when (and old (not (eq old btr:*current-bullet-world*)))
+      (ignore-errors (btr:destroy-world old)))
+    btr:*current-bullet-world*))
+
+(defun init-projection ()
+  "Make a fresh belief state with the floor, the kitchen (:IAI-KITCHEN) and the PR2 at the
+origin with parked arms and the torso halfway up; read the URDFs from ROS parameters when a
+node runs, else from the project's files."
+  (coe:clear-belief)
+  (let* ((kitchen (get-kitchen-urdf))
+         (robot (get-robot-urdf))
+         (robot-name (rob-int:set-robot-name (cl-urdf:name robot)))
+         (kitchen-name (rob-int:urdf-name->robot-name (cl-urdf:name kitchen))))
+    (setf rob-int:*robot-urdf* robot
+          btr:*environment-name* kitchen-name
+          cram-tf:*robot-base-frame* (or (rob-int::first-solution-value
+                                          '?f `(rob-int:robot-base-frame ,robot-name ?f))
+                                         "base_footprint"))
+    (fresh-world)
+    (unless (assoc :bottle btr:*mesh-files*) (add-objects-to-mesh-list))
+    (let ((world btr:*current-bullet-world*))
+      (btr:add-object world :static-plane :floor '((0 0 0) (0 0 0 1))
+                      :normal '(0 0 1) :constant 0 :collision-mask '(:default-filter))
+      (btr:add-object world :urdf kitchen-name '((0 0 0) (0 0 0 1)) :urdf kitchen
+                      :collision-group :static-filter
+                      :collision-mask '(:default-filter :character-filter))
+      (let ((pr2 (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
+        (btr:set-robot-state-from-joints (robot-park-joint-states robot-name) pr2)
+        (multiple-value-bind (torso-link torso-joint)
+            (let ((b (car (prolog `(rob-int:robot-torso-link-joint ,robot-name ?l ?j)))))
+              (values (cut:var-value '?l b) (cut:var-value '?j b)))
+          (declare (ignore torso-link))
+          (when (and (stringp torso-joint) (member torso-joint (btr:joint-names pr2) :test #'equal))
+            (multiple-value-bind (lo hi) (btr:joint-limits pr2 torso-joint)
+              (when (and lo hi)
+                (btr:set-robot-state-from-joints `((,torso-joint ,(/ (+ lo hi) 2))) pr2))))))
+      (btr:debug-window world))
+    (setf cram-tf:*tf-default-timeout* 2.0
+          prolog:*break-on-lisp-errors* t)
+    btr:*current-bullet-world*))
+
+(defun move-kitchen-joint (&key (joint-name "iai_fridge_door_joint") (joint-angle 0.2d0)
+                             (kitchen-name btr:*environment-name*))
+  "Set the kitchen joint JOINT-NAME to JOINT-ANGLE in the belief state."
+  (btr:set-robot-state-from-joints
+   `((,joint-name ,joint-angle))
+   (or (btr:object btr:*current-bullet-world* kitchen-name)
+       (error "MOVE-KITCHEN-JOINT: there is no kitchen object ~s in the world." kitchen-name))))
+
+(let* ((package (find-package :roslisp-utilities))
+       (register (and package (find-symbol "REGISTER-ROS-INIT-FUNCTION" package))))
+  (when (and register (macro-function register))
+    (eval `(,register init-projection))))

@@ -1,0 +1,40 @@
+;;;; Package ROS-LOAD: LOAD-SYSTEM as the tutorials call it, (ros-load:load-system
+;;;; "cram_pepper_demo" :cram-pepper-demo), mapped to this project's ASDF systems.
+
+(defpackage :ros-load
+  (:use :cl)
+  (:export #:load-system #:ros-package-system-name #:*ros-package-systems*))
+
+(in-package :ros-load)
+
+(defparameter *ros-package-systems*
+  '(("cram_bullet_world_tutorial" . "cram-bullet-world-tutorial")
+    ("cram_pepper_demo" . "cram-pepper-demo")
+    ("cram_pepper_description" . "cram-pepper-description")
+    ("cram_pr2_description" . "cram-pr2-description")
+    ("cram_mobile_pick_place_plans" . "cram-mobile-pick-place-plans")
+    ("cram_object_knowledge" . "cram-object-knowledge")
+    ("cram_urdf_projection" . "cram-urdf-projection")
+    ("cram_bullet_reasoning" . "cram-bullet-reasoning"))
+  "ROS package name -> the ASDF system that provides it here.")
+
+(defun ros-package-system-name (ros-package)
+  "The ASDF system name for the ROS package ROS-PACKAGE (underscores read as hyphens)."
+  (unless (and (stringp ros-package) (plusp (length ros-package)))
+    (error "ROS-LOAD: expected a ROS package name string such as \"cram_pepper_demo\", got ~s."
+           ros-package))
+  (or (cdr (assoc ros-package *ros-package-systems* :test #'string=))
+      (substitute #\- #\_ (string-downcase ros-package))))
+
+(defun load-system (ros-package &optional system)
+  "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
+the one ROS-PACKAGE maps to. Returns the system's name."
+  (let ((name (cond ((null system) (ros-package-system-name ros-package))
+                    ((symbolp system) (string-downcase (symbol-name system)))
+                    ((stringp system) system)
+                    (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system)))))
+    (ros-package-system-name ros-package)
+    (unless (asdf:find-system name nil)
+      (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s." name ros-package))
+    (asdf:load-system name)
+    name))
