@@ -63,6 +63,7 @@
                (:file "tasks")
                (:file "failures")
                (:file "language")
+               (:file "goals")
                (:file "fluents")
                (:file "task-tree-output")))
 
@@ -196,7 +197,8 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-pr2-description" "cram-pepper-description"
                "cram-designators" "cram-executive" "cram-bullet-reasoning"
                "cram-common-designators" "cram-urdf-projection"
-               "cram-object-knowledge" "cram-mobile-pick-place-plans"))
+               "cram-object-knowledge" "cram-mobile-pick-place-plans"
+               "ros-load" "cram-bullet-world-tutorial" "cram-pepper-demo"))
 
 (defsystem "roslisp-utilities/ros-home"
   :description "Makes the ROS home directory before roslisp loads (roslisp hangs without it)."
@@ -298,7 +300,9 @@ Optional: not part of cram-plans (loading roslisp costs about 1.9 s)."
 (defsystem "cram-plans-tests/ros"
   :depends-on ("cram-plans-tests/base" "roslisp-utilities" "sb-posix")
   :pathname "tests/"
-  :components ((:file "ros-tests")))
+  :serial t
+  :components ((:file "ros-tests")
+               (:file "ros-live-tests")))
 
 (defsystem "cram-plans-tests/urdf-proj"
   :depends-on ("cram-plans-tests/base" "cram-urdf-projection" "cram-pr2-description"
@@ -346,3 +350,32 @@ grasps, gripper openings and efforts, pick and place trajectories."
   :components ((:file "pp-package")
                (:file "atomic-actions")
                (:file "pick-place")))
+
+(defsystem "ros-load"
+  :description "ROS-LOAD:LOAD-SYSTEM, mapping ROS package names to this project's systems."
+  :pathname "src/tutorials/"
+  :components ((:file "ros-load")))
+
+(defsystem "cram-bullet-world-tutorial"
+  :description "The Bullet world tutorials (BTW-TUT): init-projection, move-bottle, switching two
+bottles."
+  :depends-on ("cram-prolog" "cram-utilities" "cl-transforms" "cram-designators"
+               "cram-language" "cram-common-failures" "cram-executive"
+               "cram-robot-interfaces" "cram-bullet-reasoning" "cram-pr2-description"
+               "cram-location-costmap" "cram-common-designators" "cram-urdf-projection"
+               "cram-object-knowledge" "cram-mobile-pick-place-plans" "ros-load")
+  :pathname "src/tutorials/"
+  :serial t
+  :components ((:file "btw-tut-setup")
+               (:file "btw-tut-move-bottle")
+               (:file "btw-tut-switch-bottles")))
+
+(defsystem "cram-pepper-demo"
+  :description "Pepper as a shopping assistant (DEMO): the shop, the menus, the product search."
+  :depends-on ("cram-bullet-world-tutorial" "cram-pepper-description")
+  :pathname "src/tutorials/"
+  :serial t
+  :components ((:file "pepper-setup")
+               (:file "pepper-shelf-prolog")
+               (:file "pepper-plans")
+               (:file "pepper-search")))

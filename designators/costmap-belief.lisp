@@ -214,24 +214,28 @@ centre and top of its bounding box and the middles of its four vertical sides."
 (defun floor-object-p (object)
   (member :floor (btr:item-types object)))
 
-(defun robot-pose-collisions (robot-name pose &key (world btr:*current-bullet-world*))
+(defun robot-pose-collisions (robot-name pose &key (world btr:*current-bullet-world*) in-place)
   "The names of the objects the robot ROBOT-NAME touches when it stands at POSE, checked in a
-copy of WORLD; the floor and the objects attached to the robot are left out."
+copy of WORLD (or, with IN-PLACE, in WORLD itself, which must then be a scratch copy); the floor
+and the objects attached to the robot are left out."
   (let ((pose (if (typep pose 'cl-transforms-stamped:pose-stamped)
                   (cl-transforms-stamped:pose-stamped->pose pose)
                   pose)))
-    (btr:with-copied-world (world)
-      (let* ((copy btr:*current-bullet-world*)
-             (robot (find-world-object robot-name copy)))
-        (unless (and robot (btr:robot-object-p robot))
-          (error "There is no robot ~s in the belief state (objects: ~{~s~^ ~})."
-                 robot-name (btr:object-names copy)))
-        (setf (btr:pose robot) pose)
-        (let ((attached (mapcar #'first (btr:attached-objects robot))))
-          (loop for name in (btr:find-objects-in-contact copy robot)
-                for object = (btr:object copy name)
-                unless (or (member name attached) (and object (floor-object-p object)))
-                  collect name))))))
+    (flet ((check (copy)
+             (let ((robot (find-world-object robot-name copy)))
+               (unless (and robot (btr:robot-object-p robot))
+                 (error "There is no robot ~s in the belief state (objects: ~{~s~^ ~})."
+                        robot-name (btr:object-names copy)))
+               (setf (btr:pose robot) pose)
+               (let ((attached (mapcar #'first (btr:attached-objects robot))))
+                 (loop for name in (btr:find-objects-in-contact copy robot)
+                       for object = (btr:object copy name)
+                       unless (or (member name attached) (and object (floor-object-p object)))
+                         collect name)))))
+      (if in-place
+          (check world)
+          (btr:with-copied-world (world)
+            (check btr:*current-bullet-world*))))))
 
 (defun find-world-object (name &optional (world btr:*current-bullet-world*))
   "The object of WORLD called NAME, compared by symbol name (so :MUG-1 finds MUG-1), or NIL."

@@ -32,6 +32,31 @@
                                 :resolution (resolution costmap)))
    'occupancy 1))
 
+(defparameter *robot-parking-pose*
+  (cl-transforms:make-pose (cl-transforms:make-3d-vector 1000 1000 -1000)
+                           (cl-transforms:make-identity-rotation))
+  "Where the robot waits in a scratch world while rays are cast: far from everything.")
+
+(defvar *scratch-worlds* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Location designator -> alist robot name -> its scratch world.")
+
+(defun park-robot (world robot-name)
+  "Move the robot ROBOT-NAME of WORLD to *ROBOT-PARKING-POSE*."
+  (let ((robot (robot-world-object robot-name world)))
+    (when robot (setf (btr:pose robot) *robot-parking-pose*))
+    world))
+
+(defun designator-scratch-world (designator robot-name)
+  "A copy of the belief state for DESIGNATOR's checks, made once per designator and robot: the
+robot ROBOT-NAME waits far away, so that rays are cast without it and candidate base poses are
+tested by moving it there and back."
+  (let ((entry (assoc robot-name (gethash designator *scratch-worlds*))))
+    (if entry
+        (cdr entry)
+        (let ((world (park-robot (btr:copy-world) robot-name)))
+          (push (cons robot-name world) (gethash designator *scratch-worlds*))
+          world))))
+
 (defun visible-for-costmap (designator robot)
   "The costmap of the base poses from which the robot ROBOT sees the target of DESIGNATOR:
 free space (COSTMAP-PADDING) within VISIBILITY-COSTMAP-SIZE of the target, a gaussian around
@@ -55,8 +80,7 @@ it, and a line of sight from the camera height; the base faces the target."
                                   (make-line-of-sight-cost-function
                                    target (robot-camera-height robot)
                                    :target-object object :stride *line-of-sight-stride*
-                                   :ignore-objects (let ((o (robot-world-object robot)))
-                                                     (and o (list (btr:name o)))))
+                                   :world (designator-scratch-world designator robot))
                                   'line-of-sight 20)
           (register-orientation-generator costmap (make-angle-to-point-generator
                                                    target :samples samples :sample-step step))
@@ -192,13 +216,15 @@ every solution contributes and they are merged.  Extendable: add rules that buil
 
 (defun designator-costmap (designator)
   "The merged costmap of all DESIG-COSTMAP solutions of the location DESIGNATOR, or NIL when it
-has none; computed once per designator."
+has none; computed once per designator.  A Lisp error while a costmap is built (an unknown
+robot, object or link) is signalled, not turned into a failing goal."
   (let ((known (gethash designator *designator-costmaps*)))
     (cond ((eq known :none) nil)
           (known known)
           (t (let* ((costmaps (remove nil (mapcar (lambda (b) (cut:var-value '?costmap b))
-                                                  (cut:force-ll
-                                                   (prolog `(desig-costmap ,designator ?costmap))))))
+                                                  (let ((*break-on-lisp-errors* t))
+                                                    (cut:force-ll
+                                                     (prolog `(desig-costmap ,designator ?costmap)))))))
                     (merged (and costmaps (merge-costmaps costmaps))))
                (setf (gethash designator *designator-costmaps*) (or merged :none))
                merged)))))
@@ -215,14 +241,7 @@ costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
 ;;; ---- validators ------------------------------------------------------------------------------------
 
 (defstruct (robot-pose-request (:conc-name request-))
-  robot target object kind (sight-world nil))
-
-(defun request-line-of-sight-world (request)
-  "A copy of the belief state without the request's robot, made once per request."
-  (or (request-sight-world request)
-      (setf (request-sight-world request)
-            (let ((o (robot-world-object (request-robot request))))
-              (world-without (and o (list (btr:name o))))))))
+  robot target object kind scratch-world)
 
 (defvar *designator-requests* (make-hash-table :test 'eq :weakness :key :synchronized t)
   "Location designator -> list of ROBOT-POSE-REQUESTs for its validators.")
@@ -237,8 +256,9 @@ costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
                     when robot
                       collect (let ((name (designator-robot-name robot)))
                                 (multiple-value-bind (target object) (designator-target designator)
-                                  (make-robot-pose-request :robot name :target target
-                                                           :object object :kind kind))))))))
+                                  (make-robot-pose-request
+                                   :robot name :target target :object object :kind kind
+                                   :scratch-world (designator-scratch-world designator name)))))))))
 
 (defun candidate-pose (solution)
   (typecase solution
@@ -284,7 +304,7 @@ does not reach the target (for an object: its centre, top and sides)."
                                 (robot-camera-height (request-robot r)))))
                      (unless (line-of-sight-p eye (view-target-points (request-target r) (request-object r))
                                               (request-object r)
-                                              :world (request-line-of-sight-world r))
+                                              :world (request-scratch-world r))
                        (return :reject)))
               finally (return :unknown)))))
 
@@ -294,9 +314,14 @@ placed there in a copy of the belief state, touches anything but the floor and w
   (let ((requests (and (typep designator 'desig:location-designator) (designator-requests designator)))
         (pose (candidate-pose solution)))
     (cond ((or (null requests) (null pose)) :unknown)
-          ((loop for robot in (remove-duplicates (mapcar #'request-robot requests))
-                 thereis (and (robot-world-object robot)
-                              (robot-pose-collisions (btr:name (robot-world-object robot)) pose)))
+          ((loop for r in requests
+                 for world = (request-scratch-world r)
+                 for robot = (robot-world-object (request-robot r) world)
+                 thereis (and robot
+                              (unwind-protect
+                                   (robot-pose-collisions (btr:name robot) pose :world world
+                                                                               :in-place t)
+                                (park-robot world (request-robot r)))))
            :reject)
           (t :unknown))))
 

@@ -101,6 +101,8 @@ be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies 
    (orientation-generators :initform '() :accessor orientation-generators)
    (height-generators :initform '() :accessor height-generators)
    (matrix :initform nil :accessor %matrix)
+   (region :initform nil :accessor %region
+           :documentation "(row-0 row-1 col-0 col-1) outside which the grid is 0.")
    (distribution :initform nil :accessor %distribution)
    (random-state :initarg :random-state :reader costmap-random-state))
   (:documentation "A grid over the map whose cell values are the product of the registered
@@ -152,7 +154,7 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
   (+ (origin-y costmap) (* (+ row 0.5d0) (resolution costmap))))
 
 (defun invalidate-costmap (costmap)
-  (setf (%matrix costmap) nil (%distribution costmap) nil)
+  (setf (%matrix costmap) nil (%distribution costmap) nil (%region costmap) nil)
   costmap)
 
 (defgeneric costmap-generator-name->score (name)
@@ -279,6 +281,7 @@ index; computed once and cached until another function is registered."
              (m (make-array (list rows cols) :element-type 'double-float :initial-element 0d0)))
         (declare (type (simple-array double-float (* *)) m))
         (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
+          (setf (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))
           (when (and (< r0 r1) (< c0 c1))
             (loop for r from r0 below r1 do (loop for c from c0 below c1 do (setf (aref m r c) 1d0)))
             (loop for (name fn) in (cost-functions costmap)
@@ -307,18 +310,24 @@ index; computed once and cached until another function is registered."
 (defun costmap-distribution (costmap)
   (or (%distribution costmap)
       (let* ((m (get-cost-map costmap))
-             (n (array-total-size m))
-             (count (loop for i below n count (> (row-major-aref m i) 0d0)))
+             (cols (costmap-columns costmap))
+             (region (%region costmap))
+             (count (destructuring-bind (r0 r1 c0 c1) region
+                      (loop for r from r0 below r1
+                            sum (loop for c from c0 below c1 count (> (aref m r c) 0d0)))))
              (cells (make-array count :element-type 'fixnum))
              (cumulative (make-array count :element-type 'double-float))
              (sum 0d0) (k 0))
-        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k))
-        (dotimes (i n)
-          (let ((v (row-major-aref m i)))
-            (when (> v 0d0)
-              (incf sum v)
-              (setf (aref cells k) i (aref cumulative k) sum)
-              (incf k))))
+        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k cols))
+        (destructuring-bind (r0 r1 c0 c1) region
+          (declare (type fixnum r0 r1 c0 c1))
+          (loop for r of-type fixnum from r0 below r1
+                do (loop for c of-type fixnum from c0 below c1
+                         do (let ((v (aref m r c)))
+                              (when (> v 0d0)
+                                (incf sum v)
+                                (setf (aref cells k) (+ c (* r cols)) (aref cumulative k) sum)
+                                (incf k))))))
         (when (zerop count)
           (error 'invalid-probability-distribution
                  :costmap costmap

@@ -125,7 +125,7 @@ kept within the CAMERA-MINIMAL-HEIGHT and CAMERA-MAXIMAL-HEIGHT facts."
 (defun arm-lateral-offset (robot-name arm &optional (world btr:*current-bullet-world*))
   "The sideways offset (metres, left positive) of the first link of ARM from the base of the
 robot ROBOT-NAME, from the belief state; 0 when the robot is not there."
-  (unless (cut:lazy-car (prolog `(rob-int:arm ,robot-name ,arm)))
+  (unless (prolog `(rob-int:arm ,robot-name ,arm))
     (error "Location designator: ~s is not an arm of ~s (rob-int:arm facts)." arm robot-name))
   (let* ((robot (robot-world-object robot-name world))
          (links (ignore-errors (rob-int:get-arm-links robot-name arm)))

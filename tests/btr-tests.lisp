@@ -209,3 +209,33 @@
     (let ((v (var-value '?s (lazy-car (prolog '(and (btr:bullet-world ?w)
                                                   (btr:joint-state ?w :pr2 "torso_lift_joint" ?s)))))))
       (is (< (abs (- 0.2d0 v)) 1d-9)))))
+
+(defun relative-pose (a b)
+  "Pose of B in the frame of A."
+  (cl-transforms:transform->pose
+   (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform a))
+                             (cl-transforms:pose->transform b))))
+
+(test urdf-rerooted-at-another-link
+  ;; seed 003 roots Pepper at base_footprint, which hangs below Tibia through KneePitch
+  (let* ((w (fresh-world))
+         (text (uiop:read-file-string (resource "robots/pepper/pepper.urdf")))
+         (plain (btr:add-object w :urdf :plain '((5 0 0) (0 0 0 1)) :urdf text))
+         (model (cl-urdf:parse-urdf text)))
+    (setf (slot-value model 'cl-urdf:root-link) (gethash "base_footprint" (cl-urdf:links model)))
+    (let ((rerooted (btr:add-object w :urdf :pepper '((0 0 0) (0 0 0 1)) :urdf model)))
+      (is (equal "base_footprint" (cl-urdf:name (cl-urdf:root-link (btr:urdf rerooted)))))
+      (is (< (cl-transforms:v-norm (cl-transforms:origin (btr:link-pose rerooted "base_footprint"))) 1d-9))
+      (is (< (abs (- 0.82d0 (z-of (btr:link-pose rerooted "base_link")))) 1d-3)
+          "base_link stands 0.82 m above the footprint")
+      ;; the same joint values give the same relative link poses in both trees
+      (dolist (model-robot (list plain rerooted))
+        (btr:set-robot-state-from-joints '(("KneePitch" 0.3) ("HipPitch" -0.2) ("HeadYaw" 0.5)) model-robot))
+      (dolist (pair '(("Tibia" "Pelvis") ("base_footprint" "Head") ("Pelvis" "torso")))
+        (let ((a (relative-pose (btr:link-pose plain (first pair)) (btr:link-pose plain (second pair))))
+              (b (relative-pose (btr:link-pose rerooted (first pair)) (btr:link-pose rerooted (second pair)))))
+          (is (< (cl-transforms:v-dist (cl-transforms:origin a) (cl-transforms:origin b)) 1d-6)
+              "~a → ~a differs between the trees" (first pair) (second pair))
+          (is (< (cl-transforms:angle-between-quaternions (cl-transforms:orientation a)
+                                                          (cl-transforms:orientation b))
+                 1d-6)))))))

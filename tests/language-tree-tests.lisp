@@ -254,3 +254,25 @@
                     (push (designator-n location) seen)
                     (if (= (designator-n location) 8) :found (fail 'failure-c))))))))
     (is (equal '(8 4 0) seen))))
+
+;;; Goals
+
+(cpl:declare-goal achieve-test-goal (occasion)
+  "A goal for the tests.")
+
+(cpl:def-goal (achieve-test-goal (object-in-hand ?object ?object))
+  (list :same ?object))
+
+(cpl:def-goal (achieve-test-goal (object-in-hand ?object ?hand))
+  (list :holding ?object ?hand))
+
+(cpl:def-goal (achieve-test-goal (robot-at ?location))
+  (list :at ?location))
+
+(deftest goals-dispatch-on-patterns
+  (is (equal '(:holding :cup :left) (achieve-test-goal '(object-in-hand :cup :left))))
+  (is (equal '(:same :cup) (achieve-test-goal '(object-in-hand :cup :cup))))
+  (is (equal '(:at (1 2)) (achieve-test-goal '(robot-at (1 2)))))
+  (signals error (achieve-test-goal '(flying)))
+  (top-level (achieve-test-goal '(robot-at :table)))
+  (is (eq :goal (cpl:node-kind (first (cpl:node-children cpl:*last-task-tree*))))))

@@ -258,3 +258,19 @@ unset), restoring the previous values afterwards."
                        :key (lambda (m) (getf m :name)))
                  :id)))
     (btr:destroy-world w)))
+
+(test ensure-ros-home-creates-the-directory
+  (let ((dir (format nil "/tmp/cram-ros-home-test-~d/nested" (sb-posix:getpid))))
+    (unwind-protect
+         (with-env (("ROS_HOME" dir))
+           (is (equal (uiop:ensure-directory-pathname dir) (roslisp-utilities:ros-home-directory)))
+           (is-false (probe-file (uiop:ensure-directory-pathname dir)))
+           (roslisp-utilities:ensure-ros-home)
+           (is-true (uiop:directory-exists-p (uiop:ensure-directory-pathname dir)))
+           (is-true (uiop:directory-exists-p (format nil "~a/log/" dir))))
+      (uiop:delete-directory-tree (uiop:ensure-directory-pathname
+                                   (format nil "/tmp/cram-ros-home-test-~d/" (sb-posix:getpid)))
+                                  :validate t :if-does-not-exist :ignore)))
+  (with-env (("ROS_HOME" nil))
+    (is (equal (merge-pathnames ".ros/" (user-homedir-pathname))
+               (roslisp-utilities:ros-home-directory)))))

@@ -265,3 +265,23 @@
   (let ((world (if (is-var ?world) *current-bullet-world* ?world)))
     (with-stored-world (world)
       (force-ll (prolog `(and ,@goals))))))
+
+;;; ---- documentation of the predicates -----------------------------------------------------------
+
+(loop for (symbol doc) in
+      '((bullet-world "(bullet-world ?world): ?world is *CURRENT-BULLET-WORLD*.")
+        (%object "(%object ?world ?name ?object): ?object is the Lisp object called ?name.")
+        (item "(item ?world ?name): ?name is a movable item.")
+        (retract "(retract ?world (object ?name)), (retract ?world (attached ?robot [?link] ?object)), or the same with the world inside the term: remove from the belief state.")
+        (attached "(attached ?world ?robot [?link] ?object): ?object (a name or object) is attached to ?link of ?robot.")
+        (link "(link ?world ?robot ?link): ?link is a link name of the articulated object ?robot.")
+        (object-pose-on "(assert ?world (object-pose-on ?name ?pose)): put the bottom of ?name on ?pose.")
+        (contact "(contact ?world ?a ?b [?link]): ?a and ?b touch (?link: the link of an articulated one).")
+        (stable "(stable ?world [?name]): ?name (or every item) moves < 5 mm and 0.15 rad in 5 s of simulation of a copy.")
+        (supported-by "(supported-by ?world ?object ?support): ?object touches ?support and lies above the touched part.")
+        (above "(above ?world ?a ?b): the bounding box centre of ?a is higher than that of ?b.")
+        (below "(below ?world ?a ?b): the bounding box centre of ?a is lower than that of ?b.")
+        (visible "(visible ?world ?robot ?object): at least *VISIBILITY-THRESHOLD* of ?object is unoccluded from ?robot's camera.")
+        (occluding-objects "(occluding-objects ?world ?robot ?object ?occluders): names of what hides ?object.")
+        (object-not-in-collision "(object-not-in-collision ?world ?name): ?name touches only what is attached to it."))
+      do (setf (documentation symbol 'function) doc))

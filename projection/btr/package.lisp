@@ -5,9 +5,9 @@
   (:use :cl)
   (:export #:parse-urdf #:urdf-error #:robot #:name #:links #:joints #:root-link #:source
            #:link #:joint #:parent #:child #:joint-type #:origin #:axis #:limits
-           #:lower #:upper #:velocity #:effort #:mimic #:from-joint #:multiplier #:offset
-           #:collision #:visual #:geometry #:material #:color #:filename #:scale #:size
-           #:radius #:len #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names))
+           #:lower #:upper #:mimic #:collision #:visual
+           #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names
+           #:rerooted-source))
 
 (defpackage :cram-bullet-reasoning
   (:nicknames :btr)
@@ -30,7 +30,7 @@
    #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states
    #:set-robot-state-from-joints #:joint-limits #:joint-lower-limit #:joint-upper-limit
    #:get-robot-object #:get-robot-name #:get-environment-object #:*environment-name*
-   #:robot-object-p #:link-exists-p #:calculate-pan-tilt
+   #:robot-object-p #:link-exists-p #:object-handle #:link-index #:joint-index
    #:attach-object #:detach-object #:detach-all-objects #:attached-objects #:object-attached
    #:available-arms
    ;; physics and geometry queries
@@ -43,8 +43,8 @@
    #:visible #:occluding-objects #:object-visible-p #:visibility-fraction
    #:*visibility-threshold* #:camera-pose
    ;; Prolog interface names
-   #:retract #:assert #:attached #:object-pose-on #:link #:head-pointing-at
-   #:with-copied-world #:object-bottom-pose #:%pose))
+   #:retract #:assert #:attached #:object-pose-on #:link
+   #:object-bottom-pose #:item #:robot-object #:with-stored-world))
 
 (defpackage :cram-bullet-reasoning-utilities
   (:nicknames :btr-utils)

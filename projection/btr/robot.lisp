@@ -151,9 +151,9 @@ table name → value. All joints are set at once, then links and attached object
                   (null (btr-fail ":urdf object needs :urdf (a URDF string or a CL-URDF:ROBOT)"))))
          (natural-root (loop for l being the hash-values of (cl-urdf:links model)
                              unless (cl-urdf:parent-joint l) return l)))
+    ;; a model whose ROOT-LINK was set to another link is re-rooted there
     (unless (eq natural-root (cl-urdf:root-link model))
-      (btr-fail ":urdf model ~s has root link ~s set, but its tree starts at ~s"
-                (cl-urdf:name model) (cl-urdf:name (cl-urdf:root-link model)) (cl-urdf:name natural-root)))
+      (setf model (cl-urdf:parse-urdf (cl-urdf:rerooted-source model))))
     (let ((handle (native:add-urdf (world-handle world) (cl-urdf:source model) :pose pose
                                   :exact-meshes (eq collision-group :static-filter))))
       (values handle 'robot-object nil

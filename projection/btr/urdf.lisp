@@ -216,3 +216,83 @@
 (defun robot-joint-names (robot)
   "Sorted names of the joints of ROBOT."
   (sort (loop for k being the hash-keys of (joints robot) collect k) #'string<))
+
+;;; ---- re-rooting ------------------------------------------------------------------------------
+
+(defun quaternion-inverse-rotate (q v)
+  "V rotated by the inverse of the unit quaternion Q (x y z w)."
+  (destructuring-bind (qx qy qz qw) q
+    (let* ((x (- qx)) (y (- qy)) (z (- qz)) (w qw)
+           (vx (first v)) (vy (second v)) (vz (third v))
+           ;; t = 2 * cross(q.xyz, v); v' = v + w*t + cross(q.xyz, t)
+           (tx (* 2 (- (* y vz) (* z vy))))
+           (ty (* 2 (- (* z vx) (* x vz))))
+           (tz (* 2 (- (* x vy) (* y vx)))))
+      (list (+ vx (* w tx) (- (* y tz) (* z ty)))
+            (+ vy (* w ty) (- (* z tx) (* x tz)))
+            (+ vz (* w tz) (- (* x ty) (* y tx)))))))
+
+(defun quaternion->rpy (q)
+  "Fixed-axis roll, pitch, yaw of the unit quaternion Q (x y z w)."
+  (destructuring-bind (x y z w) q
+    (list (atan (* 2 (+ (* w x) (* y z))) (- 1 (* 2 (+ (* x x) (* y y)))))
+          (let ((s (* 2 (- (* w y) (* z x))))) (asin (max -1d0 (min 1d0 s))))
+          (atan (* 2 (+ (* w z) (* x y))) (- 1 (* 2 (+ (* y y) (* z z))))))))
+
+(defun inverse-origin (origin)
+  "The inverse of the joint ORIGIN ((x y z) (qx qy qz qw))."
+  (destructuring-bind (p q) origin
+    (list (mapcar #'- (quaternion-inverse-rotate q p))
+          (list (- (first q)) (- (second q)) (- (third q)) (fourth q)))))
+
+(defun rerooted-source (robot)
+  "The URDF text of ROBOT with its tree re-rooted at (ROOT-LINK ROBOT). Each joint between the
+old root and the new one is reversed: a fixed joint gets the inverse origin; a movable joint
+J becomes J (same name, limits and value, axis negated, identity origin) from the old child to
+a new link J_reversed, plus a fixed joint J_reversed_offset with the inverse origin."
+  (let* ((new-root (root-link robot))
+         (path (loop for link = new-root then (parent (parent-joint link))
+                     while (parent-joint link) collect (parent-joint link))))
+    (dolist (j path)
+      (unless (member (joint-type j) '(:fixed :revolute :continuous :prismatic))
+        (urdf-fail "cannot re-root ~s at link ~s: joint ~s on the way is ~(~a~)"
+                   (name robot) (name new-root) (name j) (joint-type j))))
+    (let* ((doc (cxml:parse (source robot) (cxml-dom:make-dom-builder)))
+           (root (dom:document-element doc)))
+      (labels ((element (tag &rest attributes)
+                 (let ((e (dom:create-element doc tag)))
+                   (loop for (k v) on attributes by #'cddr do (dom:set-attribute e k v))
+                   e))
+               (origin-attributes (origin)
+                 (list "xyz" (format nil "~{~,9f~^ ~}" (first origin))
+                       "rpy" (format nil "~{~,9f~^ ~}" (quaternion->rpy (second origin)))))
+               (set-origin (joint-element origin)
+                 (let ((o (or (child-named joint-element "origin")
+                              (dom:append-child joint-element (element "origin")))))
+                   (loop for (k v) on (origin-attributes origin) by #'cddr
+                         do (dom:set-attribute o k v)))))
+        (dolist (joint-element (children-named root "joint"))
+          (let ((j (find (attr joint-element "name") path :key #'name :test #'string=)))
+            (when j
+              (let ((parent-el (child-named joint-element "parent"))
+                    (child-el (child-named joint-element "child"))
+                    (inverse (inverse-origin (origin j))))
+                (cond ((eq (joint-type j) :fixed)
+                       (dom:set-attribute parent-el "link" (name (child j)))
+                       (dom:set-attribute child-el "link" (name (parent j)))
+                       (set-origin joint-element inverse))
+                      (t
+                       (let ((middle (format nil "~a_reversed" (name j))))
+                         (dom:set-attribute parent-el "link" (name (child j)))
+                         (dom:set-attribute child-el "link" middle)
+                         (set-origin joint-element (list '(0d0 0d0 0d0) '(0d0 0d0 0d0 1d0)))
+                         (let ((axis (or (child-named joint-element "axis")
+                                         (dom:append-child joint-element (element "axis")))))
+                           (dom:set-attribute axis "xyz" (format nil "~{~,9f~^ ~}" (mapcar #'- (axis j)))))
+                         (dom:append-child root (element "link" "name" middle))
+                         (let ((offset (element "joint" "name" (format nil "~a_offset" middle) "type" "fixed")))
+                           (dom:append-child offset (element "parent" "link" middle))
+                           (dom:append-child offset (element "child" "link" (name (parent j))))
+                           (dom:append-child offset (apply #'element "origin" (origin-attributes inverse)))
+                           (dom:append-child root offset))))))))))
+      (dom:map-document (cxml:make-string-sink) doc))))

@@ -160,10 +160,10 @@ second and third values: the final position and rotation errors."
                                       (rotation-tolerance *ik-rotation-tolerance*)
                                       (random-state *ik-random-state*) (use-native t))
   "Joint values (a list, base first) placing CHAIN's tip at GOAL-POSE (a CL-TRANSFORMS pose in
-the chain's base link frame) within the tolerances and the joint limits, or NIL. The first
-attempt starts at SEED (joint values, default the middle of the limits), then up to
-MAX-RESTARTS from random configurations drawn from RANDOM-STATE; the native KDL solver of the
-same chain is tried last (USE-NATIVE). Second and third values: the position and rotation error."
+the chain's base link frame) within the tolerances and the joint limits, or NIL. With USE-NATIVE the native KDL solver of the chain runs first (from
+SEED, then MAX-RESTARTS random restarts seeded from RANDOM-STATE); then the Lisp
+Levenberg–Marquardt solver starts at SEED (joint values, default the middle of the limits)
+and up to MAX-RESTARTS random configurations drawn from RANDOM-STATE. Second and third values: the position and rotation error."
   (unless (cl-transforms:pose-p goal-pose)
     (projection-error "SOLVE-IK: goal ~s, expected a CL-TRANSFORMS pose." goal-pose))
   (let* ((n (length (ik-chain-joint-names chain)))
@@ -182,17 +182,17 @@ same chain is tried last (USE-NATIVE). Second and third values: the position and
          (rt (coerce rotation-tolerance 'double-float))
          (best nil) (best-p 1d300) (best-r 1d300))
     (sb-thread:with-mutex ((ik-chain-lock chain))
+      (when (and use-native (ik-chain-native chain))
+        (multiple-value-bind (solution err)
+            (cram-native:chain-ik (ik-chain-native chain) (btr::pose->vector goal-pose "IK goal")
+                                  :seed q :max-restarts max-restarts :position-tolerance pt
+                                  :rotation-tolerance rt :random-seed (random #.(expt 2 32) random-state))
+          (when solution
+            (return-from solve-ik (values (coerce (wrap-continuous chain (copy-seq solution)) 'list)
+                                          (aref err 0) (aref err 1))))))
       (dotimes (attempt (1+ max-restarts))
         (let ((start (if (zerop attempt) q (random-configuration chain random-state))))
           (multiple-value-bind (ok pe re) (ik-attempt chain goal start pt rt *ik-max-iterations*)
             (when (< (+ pe re) (+ best-p best-r)) (setf best (copy-seq start) best-p pe best-r re))
-            (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re))))))
-      (when (and use-native (ik-chain-native chain))
-        (multiple-value-bind (solution err)
-            (cram-native:chain-ik (ik-chain-native chain) (btr::pose->vector goal-pose "IK goal")
-                                  :seed (or best q) :max-restarts 20 :position-tolerance pt
-                                  :rotation-tolerance rt :random-seed (random #.(expt 2 32) random-state))
-          (when solution
-            (return-from solve-ik (values (coerce (wrap-continuous chain (copy-seq solution)) 'list)
-                                          (aref err 0) (aref err 1)))))))
+            (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re)))))))
     (values nil best-p best-r)))

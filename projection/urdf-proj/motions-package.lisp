@@ -9,6 +9,6 @@
    #:wait-pm
    ;; motion commands (the first element of a grounded motion designator)
    #:drive #:move-torso #:look-at #:detect #:move-gripper-joint #:move-tcp #:move-joints
-   #:move-with-constraints #:monitor-joint-state #:wait-for #:position-arms
+   #:monitor-joint-state #:wait-for #:position-arms
    ;; helpers
    #:motion-command #:motion-arguments #:*known-motion-types*))

@@ -33,7 +33,8 @@ the process modules URDF-PROJ-NAVIGATION, -TORSO, -NECK, -PERCEPTION, -GRIPPERS,
 and COMMON-DESIG:WAIT-PM."
   `(cram-projection:define-projection-environment ,name
     :special-variable-initializers
-    ((rob-int:*robot-name* (or rob-int:*robot-name* (guess-robot-name)))
+    ((btr:*current-bullet-world* btr:*current-bullet-world*)
+     (rob-int:*robot-name* (or rob-int:*robot-name* (guess-robot-name)))
      (cram-tf:*transformer* (make-instance 'cl-transforms-stamped:transformer))
      (cram-tf:*tf-default-timeout* 0.1)
      (cram-tf:*robot-base-frame*

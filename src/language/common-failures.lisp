@@ -52,6 +52,14 @@
   (:report report-failure)
   (:documentation "The root of failures of plans above single motions. DESCRIPTION explains it."))
 
+;; In the task tree the class is shown next to the text, so the text is the
+;; description alone.
+(defmethod cpl-impl::failure-description ((condition low-level-failure))
+  (or (description condition) ""))
+
+(defmethod cpl-impl::failure-description ((condition high-level-failure))
+  (or (description condition) ""))
+
 (setf (documentation 'description 'function)
       "The text explaining a LOW-LEVEL-FAILURE or HIGH-LEVEL-FAILURE (or NIL).")
 

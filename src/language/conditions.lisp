@@ -72,8 +72,11 @@ TRY-ALL ...) runs outside any TOP-LEVEL."))
                      (nested-top-level-outer condition))))
   (:documentation "Signalled when TOP-LEVEL is entered from inside a task."))
 
-(defun failure-description (condition)
-  "A one-line human-readable text for CONDITION."
-  (let ((text (handler-case (princ-to-string condition)
-                (error () (format nil "<unprintable ~s>" (type-of condition))))))
-    (substitute #\Space #\Newline text)))
+(defgeneric failure-description (condition)
+  (:documentation "A one-line human-readable text describing CONDITION, used
+in the task tree next to its class name. Layers with their own failure
+classes may specialise it.")
+  (:method ((condition condition))
+    (let ((text (handler-case (princ-to-string condition)
+                  (error () (format nil "<unprintable ~s>" (type-of condition))))))
+      (substitute #\Space #\Newline text))))

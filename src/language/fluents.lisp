@@ -117,16 +117,14 @@ transitively, on fluents computed from it."
 when TIMEOUT seconds passed first."
   (when timeout (check-real-seconds timeout 'wait-for))
   (let ((deadline (and timeout
-                       (+ (get-internal-real-time)
-                          (* timeout internal-time-units-per-second))))
+                       (+ (monotonic-microseconds) (* timeout 1000000))))
         (lock (fluent-lock fluent)))
     (bt:with-lock-held (lock)
       (loop
         (let ((result (funcall predicate fluent)))
           (when result (return result)))
         (let ((remaining (and deadline
-                              (/ (- deadline (get-internal-real-time))
-                                 internal-time-units-per-second))))
+                              (/ (- deadline (monotonic-microseconds)) 1000000))))
           (when (and remaining (<= remaining 0))
             (return nil))
           (bt:condition-wait (fluent-changed fluent) lock

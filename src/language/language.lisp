@@ -20,9 +20,12 @@ ERROR. Entering a top-level from inside a task signals NESTED-TOP-LEVEL-ERROR."
   `(progn ,@forms))
 
 (defun form-label (form)
-  (let ((*print-length* 3) (*print-level* 2) (*print-pretty* nil))
-    (let ((text (prin1-to-string (if (consp form) (first form) form))))
-      (if (> (length text) 60) (subseq text 0 60) text))))
+  (let* ((head (if (consp form) (first form) form))
+         (text (if (symbolp head)
+                   (string-downcase (symbol-name head))
+                   (let ((*print-length* 3) (*print-level* 2) (*print-pretty* nil))
+                     (prin1-to-string head)))))
+    (if (> (length text) 60) (subseq text 0 60) text)))
 
 (defun thunks-form (forms)
   `(list ,@(loop for form in forms collect `(lambda () ,form))))

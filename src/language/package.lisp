@@ -8,7 +8,7 @@
    ;; tasks and plan macros
    #:top-level #:named-top-level #:seq #:par #:pursue #:try-all
    #:try-in-order #:try-each-in-order
-   #:def-cram-function #:def-top-level-cram-function
+   #:def-cram-function #:def-top-level-cram-function #:declare-goal #:def-goal
    #:*current-task* #:task #:task-name #:task-status #:task-parent
    #:current-task-p #:*inherited-specials*
    #:not-inside-plan-error #:nested-top-level-error

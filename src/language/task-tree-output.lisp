@@ -24,7 +24,7 @@
          "start_unix" (node-start-unix node)
          "end_unix" (node-end-unix node)
          "start_offset_s" (/ (- (node-start-time node) root-start)
-                             (float internal-time-units-per-second 1d0))
+                             1d6)
          "duration_s" (node-duration node)
          "failure" (failure-json (node-failure node))
          "caught_failures" (map 'vector #'failure-json (node-caught-failures node))
@@ -94,7 +94,7 @@ details>summary{cursor:pointer;padding:2px 0}
                    outcome outcome
                    (format-duration (node-duration node))
                    (format-duration (/ (- (node-start-time node) root-start)
-                                       (float internal-time-units-per-second 1d0)))
+                                       1d6))
                    (and (node-designator node) (html-escape (node-designator node)))))
          (details
            (with-output-to-string (out)

@@ -27,8 +27,8 @@
       (documentation 'node-name 'function) "The name of a task tree node (a symbol or string)."
       (documentation 'node-designator 'function) "The printed designator of a task tree node, or NIL."
       (documentation 'node-parent 'function) "The parent node, NIL for the root."
-      (documentation 'node-start-time 'function) "Internal real time at which the node started."
-      (documentation 'node-end-time 'function) "Internal real time at which the node ended, NIL while it runs."
+      (documentation 'node-start-time 'function) "Monotonic clock time (microseconds) at which the node started."
+      (documentation 'node-end-time 'function) "Monotonic clock time (microseconds) at which the node ended, NIL while it runs."
       (documentation 'node-start-unix 'function) "Unix time (seconds, double) at which the node started."
       (documentation 'node-end-unix 'function) "Unix time at which the node ended, NIL while it runs."
       (documentation 'node-outcome 'function) "One of :RUNNING, :SUCCEEDED, :FAILED, :EVAPORATED."
@@ -58,8 +58,8 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
 
 (defun node-duration (node)
   "Seconds between start and end of NODE (up to now while it runs)."
-  (/ (- (or (node-end-time node) (get-internal-real-time)) (node-start-time node))
-     (float internal-time-units-per-second 1d0)))
+  (/ (- (or (node-end-time node) (monotonic-microseconds)) (node-start-time node))
+     1d6))
 
 (defun failure-plist (condition)
   (list :class (type-of condition) :description (failure-description condition)))
@@ -77,7 +77,7 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
   (let ((node (%make-task-tree-node :kind kind :name name
                                     :designator (designator-string designator)
                                     :parent parent
-                                    :start-time (get-internal-real-time)
+                                    :start-time (monotonic-microseconds)
                                     :start-unix (unix-time))))
     (when parent
       (bt:with-lock-held ((node-lock parent))
@@ -99,7 +99,7 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
 
 (defun finish-node (node outcome failure)
   (bt:with-lock-held ((node-lock node))
-    (setf (node-end-time node) (get-internal-real-time)
+    (setf (node-end-time node) (monotonic-microseconds)
           (node-end-unix node) (unix-time)
           (node-outcome node) outcome
           (node-failure node) (and failure (failure-plist failure)))))

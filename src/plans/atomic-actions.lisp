@@ -289,7 +289,7 @@ robot description (:PARK, :CARRY, :POINT ...) or joint states already."
           ((realp position)
            (let ((?position position))
              (exe:perform (desig:a motion (type moving-gripper-joint) (gripper ?arm)
-                                   (joint-angle ?position)))))
+                                   (joint-position ?position)))))
           (t (pp-error "Gripper position ~s: expected :OPEN, :CLOSE or metres." position)))))
 
 (def-action-grounding :setting-gripper (d)

@@ -26,6 +26,11 @@
                        (:default "the default; ROS_MASTER_URI is unset")))))
   (:documentation "STARTUP-ROS found no master at the URI it was to connect to."))
 
+(setf (documentation 'ros-master-unreachable-uri 'function)
+      "The master URI (a string) that a ROS-MASTER-UNREACHABLE condition reports."
+      (documentation 'ros-master-unreachable-source 'function)
+      "Where the URI of a ROS-MASTER-UNREACHABLE condition came from: :ARGUMENT, :ENVIRONMENT or :DEFAULT.")
+
 (defparameter *default-ros-master-uri* "http://127.0.0.1:11311"
   "The master URI used when neither :MASTER-URI, roslisp:*default-master-uri* nor ROS_MASTER_URI give one.")
 

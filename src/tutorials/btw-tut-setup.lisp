@@ -83,7 +83,7 @@ node runs, else from the project's files."
     (unless (assoc :bottle btr:*mesh-files*) (add-objects-to-mesh-list))
     (let ((world btr:*current-bullet-world*))
       (btr:add-object world :static-plane :floor '((0 0 0) (0 0 0 1))
-                      :normal '(0 0 1) :constant 0 :collision-mask '(:default-filter))
+                      :normal '(0 0 1) :constant 0)
       (btr:add-object world :urdf kitchen-name '((0 0 0) (0 0 0 1)) :urdf kitchen
                       :collision-group :static-filter
                       :collision-mask '(:default-filter :character-filter))
@@ -114,3 +114,8 @@ node runs, else from the project's files."
        (register (and package (find-symbol "REGISTER-ROS-INIT-FUNCTION" package))))
   (when (and register (macro-function register))
     (eval `(,register init-projection))))
+
+;;; The neck's forward configuration the tutorial looks back to before turning the head.
+(def-fact-group btw-tut-neck-states (rob-int:robot-joint-states)
+  (<- (rob-int:robot-joint-states :pr2 :neck ?_ :forward (("head_pan_joint" 0.0d0)
+                                                          ("head_tilt_joint" 0.0d0)))))
