@@ -198,30 +198,39 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-designators" "cram-executive" "cram-bullet-reasoning"
                "cram-common-designators" "cram-urdf-projection"
                "cram-object-knowledge" "cram-mobile-pick-place-plans"
-               "ros-load" "cram-bullet-world-tutorial" "cram-pepper-demo"))
+               "ros-load" "roslisp-utilities" "cram-bullet-world-tutorial" "cram-pepper-demo"))
 
-(defsystem "roslisp-utilities/ros-home"
-  :description "Makes the ROS home directory before roslisp loads (roslisp hangs without it)."
+(defsystem "roslisp-utilities"
+  :description "ROS integration without roslisp: init and cleanup functions, URDFs from the
+parameter server with the embedded files as fallback, the master probe, the belief state as TF
+edges and markers. STARTUP-ROS loads roslisp-utilities/ros (roslisp) when it is first called."
+  :depends-on ("cram-bullet-reasoning" "cl-transforms" "cram-robot-interfaces"
+               "bordeaux-threads" "sb-bsd-sockets")
   :pathname "src/ros/"
   :serial t
   :components ((:file "package")
-               (:file "ros-home")))
+               (:file "ros-home")
+               (:file "master")
+               (:file "names")
+               (:file "registry")
+               (:file "description")
+               (:file "belief-tf")
+               (:file "belief-markers")))
 
-(defsystem "roslisp-utilities"
-  :description "ROS integration on Debian's roslisp: STARTUP-ROS with init and cleanup functions,
-URDFs from the parameter server, the belief state on /tf and /visualization_marker_array.
-Optional: not part of cram-plans (loading roslisp costs about 1.9 s)."
-  :depends-on ("roslisp-utilities/ros-home" "cram-bullet-reasoning" "cl-transforms"
-               "cram-robot-interfaces" "bordeaux-threads" "sb-posix"
+(defsystem "roslisp-utilities/ros-home"
+  :description "Makes the ROS home directory before roslisp loads (roslisp hangs without it)."
+  :depends-on ("roslisp-utilities")
+  :pathname "src/ros/"
+  :components ((:file "ros-home-now")))
+
+(defsystem "roslisp-utilities/ros"
+  :description "The roslisp part of roslisp-utilities (Debian's roslisp and message systems):
+the node, parameters, publishing the belief state on /tf and /visualization_marker_array."
+  :depends-on ("roslisp-utilities" "roslisp-utilities/ros-home" "sb-posix"
                "roslisp" "std_msgs-msg" "geometry_msgs-msg" "tf2_msgs-msg" "visualization_msgs-msg")
   :pathname "src/ros/"
   :serial t
-  :components ((:file "master")
-               (:file "names")
-               (:file "node")
-               (:file "description")
-               (:file "belief-tf")
-               (:file "belief-markers")
+  :components ((:file "node")
                (:file "publisher")))
 
 ;;; Tests: one system per layer, all run by cram-plans-tests.
@@ -298,7 +307,7 @@ Optional: not part of cram-plans (loading roslisp costs about 1.9 s)."
   :components ((:file "scripts-tests")))
 
 (defsystem "cram-plans-tests/ros"
-  :depends-on ("cram-plans-tests/base" "roslisp-utilities" "sb-posix")
+  :depends-on ("cram-plans-tests/base" "roslisp-utilities" "roslisp-utilities/ros" "sb-posix")
   :pathname "tests/"
   :serial t
   :components ((:file "ros-tests")

@@ -12,7 +12,7 @@
 
 (declaim (optimize (speed 3) (safety 1) (debug 0)))
 
-(defvar *env* nil "Variable symbol → frame index, while compiling one clause or goal.")
+(defvar *env* nil "Alist variable symbol → frame index, while compiling one clause or goal.")
 (defvar *nvars* 0 "Number of frame slots allocated while compiling.")
 (defvar *seen* '() "Variables that already have a value in the frame at this point.")
 
@@ -74,8 +74,9 @@ list spines iteratively."
                  term)))))
 
 (defun var-index (sym)
-  (or (gethash sym *env*)
-      (prog1 (setf (gethash sym *env*) *nvars*)
+  (or (cdr (assoc sym *env* :test #'eq))
+      (prog1 *nvars*
+        (push (cons sym *nvars*) *env*)
         (incf *nvars*))))
 
 (defun atom-matcher (p)
@@ -91,6 +92,55 @@ list spines iteratively."
         (let ((x (deref term)))
           (if (pvar-p x) (bind-var m x p) (equal x p))))))
 
+(defun simple-atom-p (p)
+  (and (atom p) (not (source-var-p p))))
+
+;;; Pattern elements classified for inline matching: KIND 0 store a first occurrence, 1 unify
+;;; with a variable's value, 2 anonymous, 3 EQ-comparable atom, 5 other atom, 4 a matcher closure.
+
+(defun classify-match-element (p)
+  "Kind and datum of the source pattern P for MATCH-ELEMENT; updates *SEEN* like COMPILE-MATCH."
+  (cond ((anonymous-var-p p) (values 2 nil))
+        ((source-var-p p)
+         (let ((i (var-index p)))
+           (if (member p *seen* :test #'eq)
+               (values 1 i)
+               (progn (push p *seen*) (values 0 i)))))
+        ((and (simple-atom-p p) (or (symbolp p) (typep p 'fixnum) (characterp p))) (values 3 p))
+        ((simple-atom-p p) (values 5 p))
+        (t (values 4 (compile-match p)))))
+
+(defmacro match-element (kind datum m frame x)
+  "Inline match of the run-time term X against a classified pattern element."
+  `(let ((d ,datum))
+     (case ,kind
+       (0 (setf (svref ,frame d) ,x) t)
+       (1 (unify-terms ,m (svref ,frame d) ,x))
+       (2 t)
+       (3 (let ((x (deref ,x)))
+            (cond ((eq x d) t)
+                  ((pvar-p x) (bind-var ,m x d))
+                  (t nil))))
+       (5 (let ((x (deref ,x)))
+            (if (pvar-p x) (bind-var ,m x d) (equal x d))))
+       (t (funcall (the function d) ,m ,frame ,x)))))
+
+(defun classify-build-element (p)
+  "Kind and datum of source pattern P for BUILD-ELEMENT: 0 a variable with a value, 1 a
+constant, 2 anonymous, 3 a builder closure."
+  (cond ((anonymous-var-p p) (values 2 nil))
+        ((and (source-var-p p) (member p *seen* :test #'eq)) (values 0 (var-index p)))
+        ((not (has-source-vars-p p)) (values 1 p))
+        (t (values 3 (compile-build p)))))
+
+(defmacro build-element (kind datum frame)
+  `(let ((d ,datum))
+     (case ,kind
+       (0 (svref ,frame d))
+       (1 d)
+       (2 (make-pvar))
+       (t (funcall (the function d) ,frame)))))
+
 (defun compile-build (p)
   "A function of the frame building the run-time term for source pattern P."
   (cond ((anonymous-var-p p) (lambda (frame) (declare (ignore frame)) (make-pvar)))
@@ -102,12 +152,13 @@ list spines iteratively."
                (progn (push p *seen*)
                       (lambda (frame) (setf (svref frame i) (make-pvar p)))))))
         ((not (has-source-vars-p p)) (lambda (frame) (declare (ignore frame)) p))
-        (t (let ((bcar (compile-build (car p)))
-                 (bcdr (compile-build (cdr p))))
-             (declare (type function bcar bcdr))
-             (lambda (frame)
-               (let ((a (funcall bcar frame)))
-                 (cons a (funcall bcdr frame))))))))
+        (t (multiple-value-bind (kcar dcar) (classify-build-element (car p))
+             (multiple-value-bind (kcdr dcdr) (classify-build-element (cdr p))
+               (declare (type fixnum kcar kcdr))
+               (lambda (frame)
+                 (declare (type simple-vector frame))
+                 (let ((a (build-element kcar dcar frame)))
+                   (cons a (build-element kcdr dcdr frame)))))))))
 
 (defun compile-match (p)
   "A function (M FRAME TERM) unifying the run-time TERM with source pattern P."
@@ -130,16 +181,71 @@ list spines iteratively."
                   (builder (compile-build p)))
              (declare (type function builder))
              (setf *seen* seen)
-             (let ((mcar (compile-match (car p)))
-                   (mcdr (compile-match (cdr p))))
-               (declare (type function mcar mcdr))
-               (lambda (m frame term)
-                 (let ((x (deref term)))
-                   (cond ((consp x)
-                          (and (funcall mcar m frame (car x))
-                               (funcall mcdr m frame (cdr x))))
-                         ((pvar-p x) (bind-var m x (funcall builder frame)))
-                         (t nil)))))))))
+             (multiple-value-bind (kcar dcar) (classify-match-element (car p))
+               (multiple-value-bind (kcdr dcdr) (classify-match-element (cdr p))
+                 (declare (type fixnum kcar kcdr))
+                 (lambda (m frame term)
+                   (declare (type simple-vector frame))
+                   (let ((x (deref term)))
+                     (cond ((consp x)
+                            (and (match-element kcar dcar m frame (car x))
+                                 (match-element kcdr dcdr m frame (cdr x))))
+                           ((pvar-p x) (bind-var m x (funcall builder frame)))
+                           (t nil))))))))))
+
+;;; Argument lists: the common case of a proper list of arguments gets one loop instead of a
+;;; chain of closures, with variables and atoms handled inline.
+
+(defun compile-args-match (patterns)
+  "Like COMPILE-MATCH for a whole argument list PATTERNS."
+  (if (or (not (alexandria:proper-list-p patterns)) (null patterns))
+      (compile-match patterns)
+      (let* ((k (length patterns))
+             (kinds (make-array k :element-type 'fixnum))
+             (data (make-array k))
+             (suffixes (make-array k)))
+        (loop for p in patterns
+              for tail on patterns
+              for i from 0
+              do (let ((seen *seen*))
+                   ;; the matcher of the remaining arguments, for an argument list ending in a
+                   ;; variable (goals written (functor . ?args))
+                   (setf (svref suffixes i) (compile-match tail))
+                   (setf *seen* seen))
+                 (multiple-value-bind (kind datum) (classify-match-element p)
+                   (setf (aref kinds i) kind (svref data i) datum)))
+        (lambda (m frame args)
+          (declare (type simple-vector frame))
+          (let ((a args))
+            (dotimes (i k (let ((a (deref a)))
+                            (or (null a) (and (pvar-p a) (bind-var m a nil)))))
+              (setf a (deref a))
+              (unless (consp a)
+                (return (and (pvar-p a) (funcall (the function (svref suffixes i)) m frame a))))
+              (let ((x (car a)))
+                (unless (match-element (aref kinds i) (svref data i) m frame x)
+                  (return nil)))
+              (setf a (cdr a))))))))
+
+(defun compile-args-build (patterns)
+  "Like COMPILE-BUILD for a whole argument list PATTERNS, all of whose variables have values."
+  (if (or (not (alexandria:proper-list-p patterns)) (null patterns)
+          (not (has-source-vars-p patterns))
+          (some (lambda (v) (not (member v *seen* :test #'eq))) (term-vars patterns)))
+      (compile-build patterns)
+      (let* ((k (length patterns))
+             (kinds (make-array k :element-type 'fixnum))
+             (data (make-array k)))
+        (loop for p in patterns
+              for i from 0
+              do (multiple-value-bind (kind datum) (classify-build-element p)
+                   (setf (aref kinds i) kind (svref data i) datum)))
+        (lambda (frame)
+          (declare (type simple-vector frame))
+          (let ((result '()))
+            (loop for i of-type fixnum from (1- k) downto 0
+                  do (push (build-element (aref kinds i) (svref data i) frame) result))
+            result)))))
 
 (defun check-clause (clause)
   (unless (and (consp clause) (consp (car clause)) (car (car clause))
@@ -150,11 +256,11 @@ is a symbol, got ~s." clause)))
 (defun compile-clause (clause)
   "Compile CLAUSE, a list (head . body) of source terms, into a CLAUSE structure."
   (check-clause clause)
-  (let ((*env* (make-hash-table :test 'eq))
+  (let ((*env* '())
         (*nvars* 0)
         (*seen* '()))
     (destructuring-bind (head . body) clause
-      (let* ((match (compile-match (cdr head)))
+      (let* ((match (compile-args-match (cdr head)))
              (init (loop for v in (term-vars body)
                          unless (member v *seen* :test #'eq)
                            collect (prog1 (cons (var-index v) v) (push v *seen*))))
@@ -189,7 +295,7 @@ is a symbol, got ~s." clause)))
          (let ((pred (resolve-functor (car goal))))
            (if (pred-control pred)
                (funcall (the function (pred-control pred)) (cdr goal))
-               (let ((build (compile-build (cdr goal))))
+               (let ((build (compile-args-build (cdr goal))))
                  (declare (type function build))
                  (lambda (m frame cont barrier)
                    (declare (ignore barrier))

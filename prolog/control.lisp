@@ -172,20 +172,21 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
   "Compile the term GOAL (its ?symbols being variables) into a goal function; return it, a fresh
 frame holding a new variable for each ?symbol, and the alist symbol → frame index."
   (let ((goal (resolve-term goal))
-        (*env* (make-hash-table :test 'eq))
+        (*env* '())
         (*nvars* 0)
         (*seen* '()))
-    (dolist (v (append (term-vars goal) extra-vars))
+    (dolist (v (term-vars goal))
       (var-index v)
-      (pushnew v *seen*))
+      (push v *seen*))
+    (dolist (v extra-vars)
+      (unless (member v *seen* :test #'eq)
+        (var-index v)
+        (push v *seen*)))
     (let* ((fn (compile-goal goal))
-           (frame (make-array *nvars*))
-           (indices '()))
-      (maphash (lambda (sym i)
-                 (setf (svref frame i) (make-pvar sym))
-                 (push (cons sym i) indices))
-               *env*)
-      (values fn frame (sort indices #'< :key #'cdr)))))
+           (frame (make-array *nvars*)))
+      (loop for (sym . i) in *env*
+            do (setf (svref frame i) (make-pvar sym)))
+      (values fn frame (reverse *env*)))))
 
 ;;; Collecting solutions
 

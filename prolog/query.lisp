@@ -47,12 +47,16 @@ only the first is computed before PROLOG returns."
     (unless (and (consp b) (is-var (car b)))
       (prolog-error "PROLOG's bindings must be an alist ((?var . value) ...); ~s is not a binding."
                     b)))
-  (let* ((binding-vars (remove-duplicates (mapcar #'car bindings) :from-end t))
-         (out (remove-if #'anonymous-var-p
-                         (remove-duplicates (append (term-vars goal) binding-vars) :from-end t))))
+  (let* ((binding-vars (and bindings (remove-duplicates (mapcar #'car bindings) :from-end t)))
+         (out (and bindings
+                   (remove-if #'anonymous-var-p
+                              (remove-duplicates (append (term-vars goal) binding-vars)
+                                                 :from-end t)))))
     (multiple-value-bind (fn frame env)
-        (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
+        (compile-goal-term goal (and bindings
+                                     (append binding-vars (term-vars (mapcar #'cdr bindings)))))
       (let ((m (make-machine))
+            (out (or out (mapcar #'car env)))
             (state :fresh))
         ;; initial bindings; no choice point exists yet, so nothing needs trailing
         (dolist (b bindings)

@@ -36,9 +36,9 @@
 
 (defstruct (machine (:constructor %make-machine))
   "The state of one running query: trail and choice-point stack."
-  (trail (make-array 64) :type simple-vector)
+  (trail (make-array 32) :type simple-vector)
   (trail-top 0 :type fixnum)
-  (cps (make-array (* 32 +cp-size+)) :type simple-vector)
+  (cps (make-array (* 8 +cp-size+)) :type simple-vector)
   (cp-top 0 :type fixnum))
 
 (defun make-machine ()

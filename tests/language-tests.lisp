@@ -19,7 +19,11 @@
 
 (in-suite language)
 
-(defun thread-count () (length (bt:all-threads)))
+(defun thread-count ()
+  "The number of threads, without SBCL's finalizer thread (started on demand
+by the garbage collector at any time)."
+  (count-if-not (lambda (thread) (equal (bt:thread-name thread) "finalizer"))
+                (bt:all-threads)))
 
 (defun settled-thread-count (start)
   "The number of threads, after waiting up to 3 s for it to fall to START."
@@ -213,6 +217,20 @@
       (let ((frozen iterations))
         (cl:sleep 0.05)
         (is (= frozen iterations) "the killed sibling kept running")))))
+
+(deftest evaporation-waits-for-deferred-section
+  (let ((section-done nil) (after-section nil))
+    (is (typep (handler-case
+                   (top-level
+                     (par (progn (cpl:with-evaporation-deferred
+                                   (cl:sleep 0.15)
+                                   (setf section-done t))
+                                 (setf after-section t))
+                          (progn (cpl:sleep 0.02) (fail 'failure-a))))
+                 (plan-failure (c) c))
+               'failure-a))
+    (is (eq t section-done))
+    (is (null after-section))))
 
 (deftest nested-par-failure-kills-grandchildren
   (let ((unwound 0) (lock (bt:make-lock)))

@@ -2,7 +2,10 @@
 
 (defpackage :cram-prolog-tests
   (:use :cl :fiveam :cram-prolog :cram-utilities)
-  (:shadowing-import-from :cram-prolog #:fail))
+  (:shadowing-import-from :cram-prolog #:fail)
+  ;; the shop knowledge base below has a functor TYPE; the Pepper demo defines the same
+  ;; knowledge base with CL:TYPE, so these tests keep theirs apart
+  (:shadow #:type))
 
 (in-package :cram-prolog-tests)
 

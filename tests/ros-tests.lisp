@@ -158,13 +158,38 @@ unset), restoring the previous values afterwards."
   (let ((out (with-output-to-string (*standard-output*)
                (roslisp:ros-info (roslisp-utilities test) "info ~a" 41)
                (roslisp:ros-warn (roslisp-utilities test) "warn ~a" 42)
-               (roslisp:ros-error roslisp-utilities "error ~a" 43))))
+               (roslisp:ros-error roslisp-utilities "error ~a" 43)
+               (roslisp-utilities:ros-log :warn "through ~a" "ros-log"))))
     (is (search "[(ROSLISP-UTILITIES TEST) INFO]" out))
     (is (search "info 41" out))
     (is (search "[(ROSLISP-UTILITIES TEST) WARN]" out))
     (is (search "warn 42" out))
     (is (search "ERROR]" out))
-    (is (search "error 43" out))))
+    (is (search "error 43" out))
+    (is (search "[(ROSLISP-UTILITIES) WARN]" out))
+    (is (search "through ros-log" out))))
+
+(test light-system-loads-without-roslisp
+  ;; a fresh image: roslisp-utilities alone registers init functions and reads the embedded URDF
+  ;; without loading roslisp; startup-ros without a master still fails clearly
+  (let ((out (uiop:run-program
+              (list "sbcl" "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
+                    "--eval" "(require :asdf)"
+                    "--eval" (format nil "(handler-bind ((warning #'muffle-warning)) (asdf:load-asd ~s) (asdf:load-system \"roslisp-utilities\"))"
+                                     (namestring (repo-file "cram-plans.asd")))
+                    "--eval" "(defun my-init () t)"
+                    "--eval" "(roslisp-utilities:register-ros-init-function my-init)"
+                    "--eval" "(format t \"~&roslisp:~a~%\" (and (find-package :roslisp) t))"
+                    "--eval" "(format t \"~&inits:~a~%\" (roslisp-utilities:ros-init-functions))"
+                    "--eval" "(format t \"~&urdf:~a~%\" (length (roslisp-utilities:robot-description-string :fallback-file \"robots/pr2/pr2.urdf\")))"
+                    "--eval" (format nil "(format t \"~~&startup:~~a~~%\" (handler-case (roslisp-utilities:startup-ros :master-uri \"http://127.0.0.1:~d\") (error (e) (type-of e))))" (free-port))
+                    "--eval" "(format t \"~&roslisp-after:~a~%\" (and (find-package :roslisp) t))")
+              :output :string :error-output :output :ignore-error-status t)))
+    (is (search "roslisp:NIL" out) "~a" out)
+    (is (search "inits:(MY-INIT)" out))
+    (is (search (format nil "urdf:~d" (length (uiop:read-file-string (repo-file "robots/pr2/pr2.urdf")))) out))
+    (is (search "startup:ROS-MASTER-UNREACHABLE" out))
+    (is (search "roslisp-after:NIL" out))))
 
 (test publishing-needs-a-node
   (signals roslisp-utilities:ros-utilities-error (roslisp-utilities:publish-belief-state))

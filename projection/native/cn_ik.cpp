@@ -196,7 +196,7 @@ struct Rng {
 // Tuning of the solver.  The rotation error is weighted as if 1 rad were kRotWeight m.
 constexpr double kRotWeight = 0.4;
 constexpr int kMaxIterations = 40;   // per start
-constexpr int kStallWindow = 4;      // a start is given up when the error has not dropped
+constexpr int kStallWindow = 6;      // a start is given up when the error has not dropped
 constexpr double kStallRatio = 0.9;  // below kStallRatio of its value kStallWindow steps ago
 constexpr double kDampFloor = 1e-10; // damping added to the squared error
 constexpr double kMaxStep = 1.0;     // largest joint change in one step (rad or m)

@@ -10,7 +10,7 @@
    #:try-in-order #:try-each-in-order
    #:def-cram-function #:def-top-level-cram-function #:declare-goal #:def-goal
    #:*current-task* #:task #:task-name #:task-status #:task-parent
-   #:current-task-p #:*inherited-specials*
+   #:current-task-p #:*inherited-specials* #:with-evaporation-deferred
    #:not-inside-plan-error #:nested-top-level-error
    ;; failures
    #:plan-failure #:simple-plan-failure #:composite-failure #:composite-failures

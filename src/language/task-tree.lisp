@@ -98,11 +98,12 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
         (push entry (node-%caught-failures node))))))
 
 (defun finish-node (node outcome failure)
-  (bt:with-lock-held ((node-lock node))
-    (setf (node-end-time node) (monotonic-microseconds)
-          (node-end-unix node) (unix-time)
-          (node-outcome node) outcome
-          (node-failure node) (and failure (failure-plist failure)))))
+  (sb-sys:without-interrupts
+    (bt:with-lock-held ((node-lock node))
+      (setf (node-end-time node) (monotonic-microseconds)
+            (node-end-unix node) (unix-time)
+            (node-outcome node) outcome
+            (node-failure node) (and failure (failure-plist failure))))))
 
 (defun run-in-node (node thunk)
   "Call THUNK with NODE as the current node, and record its outcome: succeeded

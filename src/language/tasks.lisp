@@ -68,6 +68,13 @@ projection environment's clock or the current designators.")
         (push (symbol-value symbol) values)))
     (cons symbols values)))
 
+(defmacro with-evaporation-deferred (&body body)
+  "Run BODY to its end even if the task is evaporated meanwhile; the
+evaporation takes effect when BODY returns. Wrap short critical sections in
+it, above all calls into foreign code (which must not be unwound), and never
+a long or blocking wait."
+  `(sb-sys:without-interrupts ,@body))
+
 (defun task-done-p (task)
   (member (task-status task) '(:succeeded :failed :evaporated)))
 

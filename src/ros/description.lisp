@@ -45,24 +45,21 @@ ROS-UTILITIES-ERROR for a missing fallback file or a value that is no URDF docum
   (unless (and (stringp parameter) (plusp (length parameter)))
     (ros-fail "ROBOT-DESCRIPTION-STRING: parameter ~s, expected a non-empty parameter name string"
               parameter))
-  (let* ((running (ros-running-p))
-         (full-name (if running (roslisp::fully-qualified-name parameter) parameter))
-         (present (and running (roslisp:has-param parameter))))
-    (cond (present
-           (values (check-urdf-text (roslisp:get-param parameter)
-                                    (format nil "ROS parameter ~a" full-name))
-                   full-name))
-          ((null fallback-file)
-           (error 'description-parameter-missing
-                  :parameter full-name
-                  :message (format nil "ROS parameter ~a is unavailable (~:[no ROS node runs; ~
-                                        start one with ROSLISP-UTILITIES:STARTUP-ROS~;it is not ~
-                                        set on the master~]) and no :FALLBACK-FILE was given"
-                                   full-name running)))
-          (t
-           (let ((why (if running "it is not set on the master" "no ROS node runs")))
-             (multiple-value-bind (text truename) (read-fallback-file fallback-file full-name why)
-               (when running
-                 (roslisp:ros-info (roslisp-utilities) "Parameter ~a is not set; using ~a"
-                                   full-name truename))
-               (values (check-urdf-text text (namestring truename)) truename)))))))
+  (let ((running (ros-running-p)))
+    (multiple-value-bind (value present full-name)
+        (if running (funcall *parameter-reader* parameter) (values nil nil parameter))
+      (cond (present
+             (values (check-urdf-text value (format nil "ROS parameter ~a" full-name)) full-name))
+            ((null fallback-file)
+             (error 'description-parameter-missing
+                    :parameter full-name
+                    :message (format nil "ROS parameter ~a is unavailable (~:[no ROS node runs; ~
+                                          start one with ROSLISP-UTILITIES:STARTUP-ROS~;it is not ~
+                                          set on the master~]) and no :FALLBACK-FILE was given"
+                                     full-name running)))
+            (t
+             (let ((why (if running "it is not set on the master" "no ROS node runs")))
+               (multiple-value-bind (text truename) (read-fallback-file fallback-file full-name why)
+                 (when running
+                   (ros-log :info "Parameter ~a is not set; using ~a" full-name truename))
+                 (values (check-urdf-text text (namestring truename)) truename))))))))

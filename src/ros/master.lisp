@@ -34,19 +34,26 @@
 (defparameter *default-ros-master-uri* "http://127.0.0.1:11311"
   "The master URI used when neither :MASTER-URI, roslisp:*default-master-uri* nor ROS_MASTER_URI give one.")
 
+(defun roslisp-default-master-uri ()
+  "roslisp:*default-master-uri* as a string when roslisp is loaded and it is set, else NIL."
+  (let* ((package (find-package :roslisp))
+         (symbol (and package (find-symbol "*DEFAULT-MASTER-URI*" package)))
+         (value (and symbol (boundp symbol) (symbol-value symbol))))
+    (cond ((null value) nil)
+          ((stringp value) value)
+          (t (format nil "http://~a:~a" (uiop:symbol-call :roslisp "URI-ADDRESS" value)
+                     (uiop:symbol-call :roslisp "URI-PORT" value))))))
+
 (defun ros-master-uri (&optional master-uri)
   "The master URI to connect to and where it came from, as (values uri-string source):
-MASTER-URI when given (:ARGUMENT), else roslisp:*default-master-uri* (:ARGUMENT), else
-$ROS_MASTER_URI (:ENVIRONMENT), else http://127.0.0.1:11311 (:DEFAULT)."
-  (flet ((as-string (uri)
-           (if (typep uri 'roslisp::uri)
-               (format nil "http://~a:~a" (roslisp::uri-address uri) (roslisp::uri-port uri))
-               uri)))
-    (let ((env (uiop:getenv "ROS_MASTER_URI")))
-      (cond (master-uri (values (as-string master-uri) :argument))
-            (roslisp:*default-master-uri* (values (as-string roslisp:*default-master-uri*) :argument))
-            ((and env (plusp (length env))) (values env :environment))
-            (t (values *default-ros-master-uri* :default))))))
+MASTER-URI when given (:ARGUMENT), else roslisp:*default-master-uri* when roslisp is loaded and
+it is set (:ARGUMENT), else $ROS_MASTER_URI (:ENVIRONMENT), else http://127.0.0.1:11311 (:DEFAULT)."
+  (let ((env (uiop:getenv "ROS_MASTER_URI"))
+        (default (roslisp-default-master-uri)))
+    (cond (master-uri (values master-uri :argument))
+          (default (values default :argument))
+          ((and env (plusp (length env))) (values env :environment))
+          (t (values *default-ros-master-uri* :default)))))
 
 (defun parse-master-uri (uri)
   "(values host port) of URI, a string http://HOST:PORT[/]; an error naming URI otherwise."
@@ -80,17 +87,44 @@ THUNK runs in its own thread, which is terminated when it overruns."
       (setf result nil))
     result))
 
+(defparameter +get-pid-request+
+  (concatenate 'string "<?xml version=\"1.0\"?><methodCall><methodName>getPid</methodName>"
+               "<params><param><value><string>/roslisp_utilities_probe</string></value></param>"
+               "</params></methodCall>")
+  "The XML-RPC call ROS-AVAILABLE-P sends to the master.")
+
+(defun master-get-pid-code (host port)
+  "The status code of the master's answer to getPid at HOST:PORT (1 when it works), or NIL."
+  (let ((socket (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
+    (unwind-protect
+         (progn
+           (sb-bsd-sockets:socket-connect
+            socket (first (sb-bsd-sockets:host-ent-addresses (sb-bsd-sockets:get-host-by-name host)))
+            port)
+           (let ((stream (sb-bsd-sockets:socket-make-stream socket :input t :output t
+                                                                   :element-type 'character
+                                                                   :external-format :latin-1
+                                                                   :buffering :full)))
+             (format stream "POST /RPC2 HTTP/1.0~c~cHost: ~a:~d~c~cContent-Type: text/xml~c~c~
+                             Content-Length: ~d~c~c~c~c~a"
+                     #\Return #\Newline host port #\Return #\Newline #\Return #\Newline
+                     (length +get-pid-request+) #\Return #\Newline #\Return #\Newline
+                     +get-pid-request+)
+             (finish-output stream)
+             (let* ((reply (with-output-to-string (out)
+                             (loop for line = (read-line stream nil nil)
+                                   while line do (write-line line out))))
+                    (start (or (search "<int>" reply) (search "<i4>" reply))))
+               (and (search "<methodResponse>" reply) start
+                    (parse-integer reply :start (1+ (position #\> reply :start start))
+                                         :junk-allowed t)))))
+      (sb-bsd-sockets:socket-close socket))))
+
 (defun ros-available-p (&key master-uri (timeout 2))
   "True when a ROS master answers an XML-RPC getPid call at MASTER-URI (default: see
 ROS-MASTER-URI) within TIMEOUT seconds. Never hangs and never signals for an absent master; a
-malformed MASTER-URI or TIMEOUT is an error."
+malformed MASTER-URI or TIMEOUT is an error. Needs no roslisp."
   (unless (and (realp timeout) (> timeout 0))
     (ros-fail "ROS-AVAILABLE-P: timeout ~s, expected a positive number of seconds" timeout))
   (multiple-value-bind (host port) (parse-master-uri (ros-master-uri master-uri))
-    (let ((code (call-with-timeout
-                 timeout
-                 (lambda ()
-                   (first (s-xml-rpc:xml-rpc-call
-                           (s-xml-rpc:encode-xml-rpc-call "getPid" "/roslisp_utilities_probe")
-                           :host host :port port))))))
-      (eql code 1))))
+    (eql 1 (call-with-timeout timeout (lambda () (master-get-pid-code host port))))))

@@ -12,7 +12,7 @@
    #:ros-master-unreachable-uri #:ros-master-unreachable-source
    #:ros-utilities-error
    ;; node life cycle
-   #:startup-ros #:shutdown-ros #:ros-running-p
+   #:startup-ros #:shutdown-ros #:ros-running-p #:ros-log
    #:register-ros-init-function #:register-ros-cleanup-function
    #:unregister-ros-init-function #:unregister-ros-cleanup-function
    #:ros-init-functions #:ros-cleanup-functions

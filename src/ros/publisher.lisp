@@ -28,11 +28,6 @@
           (push (cons topic pub) *publications*)
           pub))))
 
-(defun check-publish-rate (rate)
-  (unless (or (null rate) (and (realp rate) (> rate 0) (<= rate 1000)))
-    (ros-fail "belief state publish rate ~s, expected NIL or a number of Hz in (0, 1000]" rate))
-  rate)
-
 ;;; ---- messages ----------------------------------------------------------------------------------
 
 (defun to-d (x) (coerce x 'double-float))
@@ -92,14 +87,8 @@
 
 ;;; ---- publishing --------------------------------------------------------------------------------
 
-(defun publish-belief-state (&key (world btr:*current-bullet-world*) (markers t))
-  "Publish WORLD's belief state once: its TF edges (BELIEF-STATE-TRANSFORMS) as one
-tf2_msgs/TFMessage on *TF-TOPIC* and, when MARKERS, its items (BELIEF-STATE-MARKERS) as a
-visualization_msgs/MarkerArray on *MARKER-TOPIC* (objects gone since the last call are deleted).
-Needs a running node (STARTUP-ROS). Returns the numbers of transforms and markers published."
-  (unless (ros-running-p)
-    (ros-fail "PUBLISH-BELIEF-STATE needs a running ROS node; start one with ROSLISP-UTILITIES:STARTUP-ROS"))
-  (check-world world)
+(defun %publish-belief-state (world markers)
+  "PUBLISH-BELIEF-STATE with roslisp loaded and a node running."
   (let* ((stamp (roslisp:ros-time))
          (edges (belief-state-transforms :world world))
          (marker-list (and markers (belief-state-markers :world world))))
@@ -124,8 +113,8 @@ Needs a running node (STARTUP-ROS). Returns the numbers of transforms and marker
 (defvar *publisher-thread* nil "The thread of START-BELIEF-STATE-PUBLISHER, or NIL.")
 (defvar *publisher-stop* nil "Set to true to make the publisher thread end.")
 
-(defun belief-state-publisher-running-p ()
-  "True while the background belief-state publisher runs."
+(defun %belief-state-publisher-running-p ()
+  "True while the background belief-state publisher thread runs."
   (and *publisher-thread* (bt:thread-alive-p *publisher-thread*) t))
 
 (defun publisher-loop (rate)
@@ -137,7 +126,7 @@ Needs a running node (STARTUP-ROS). Returns the numbers of transforms and marker
                  (error (e)
                    (let ((text (princ-to-string e)))
                      (unless (equal text last-error)
-                       (roslisp:ros-warn (roslisp-utilities) "Publishing the belief state failed: ~a" text)
+                       (ros-log :warn "Publishing the belief state failed: ~a" text)
                        (setf last-error text)))))
                (let ((left (- period (/ (- (get-internal-real-time) start)
                                         internal-time-units-per-second))))
@@ -145,23 +134,16 @@ Needs a running node (STARTUP-ROS). Returns the numbers of transforms and marker
                  (loop while (and (> left 0) (not *publisher-stop*))
                        do (sleep (min left 0.05d0)) (decf left 0.05d0)))))))
 
-(defun start-belief-state-publisher (&key (rate *belief-state-publish-rate*))
-  "Publish the belief state (BTR:*CURRENT-BULLET-WORLD*'s global value, looked up each time) at
-RATE Hz in a background thread until STOP-BELIEF-STATE-PUBLISHER or SHUTDOWN-ROS. A running
-publisher is replaced. Errors while publishing are logged once per distinct message. Needs a
-running node."
-  (check-publish-rate rate)
-  (unless rate (ros-fail "START-BELIEF-STATE-PUBLISHER: rate is NIL, expected a number of Hz"))
-  (unless (ros-running-p)
-    (ros-fail "START-BELIEF-STATE-PUBLISHER needs a running ROS node; start one with ROSLISP-UTILITIES:STARTUP-ROS"))
-  (stop-belief-state-publisher)
+(defun %start-belief-state-publisher (rate)
+  "START-BELIEF-STATE-PUBLISHER with roslisp loaded and a node running."
+  (%stop-belief-state-publisher)
   (setf *publisher-stop* nil
         *publisher-thread* (bt:make-thread (lambda () (publisher-loop rate))
                                            :name "belief state publisher"))
   *publisher-thread*)
 
-(defun stop-belief-state-publisher ()
-  "Stop the background publisher and wait for its thread to end; true when one was running."
+(defun %stop-belief-state-publisher ()
+  "Stop the background publisher thread and wait for it to end; true when one was running."
   (let ((thread *publisher-thread*))
     (when thread
       (setf *publisher-stop* t)

@@ -1,6 +1,6 @@
 ;;;; ROS_HOME must exist before roslisp is loaded: roslisp's ASDF extension creates a lock file
-;;;; there for every file it compiles and waits forever when it cannot. This file is loaded
-;;;; before roslisp and makes the directory.
+;;;; there for every file it compiles and waits forever when it cannot. ros-home-now.lisp
+;;;; (system roslisp-utilities/ros-home) calls ENSURE-ROS-HOME before roslisp loads.
 
 (in-package :roslisp-utilities)
 
@@ -21,4 +21,3 @@ return the home directory. An error names the directory when it cannot be create
                dir (uiop:getenv "ROS_HOME") e)))
     dir))
 
-(ensure-ros-home)

@@ -1,11 +1,19 @@
-;;;; Package ROS-LOAD: LOAD-SYSTEM as the tutorials call it, (ros-load:load-system
-;;;; "cram_pepper_demo" :cram-pepper-demo), mapped to this project's ASDF systems.
+;;;; ROS-LOAD:LOAD-SYSTEM as the tutorials call it, (ros-load:load-system "cram_pepper_demo"
+;;;; :cram-pepper-demo), mapped to this project's ASDF systems. The package is the one roslisp
+;;;; names ROS-LOAD-MANIFEST (nickname ROS-LOAD), so that loading Debian's roslisp later finds it
+;;;; and extends it instead of clashing with it.
 
-(defpackage :ros-load
-  (:use :cl)
-  (:export #:load-system #:ros-package-system-name #:*ros-package-systems*))
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (unless (find-package :ros-load-manifest)
+    (make-package :ros-load-manifest :nicknames '(:ros-load) :use '(:cl))
+    (export (mapcar (lambda (name) (intern name :ros-load-manifest))
+                    '("LOAD-SYSTEM" "*CURRENT-ROS-PACKAGE*"))
+            :ros-load-manifest)))
 
-(in-package :ros-load)
+(in-package :ros-load-manifest)
+
+(defvar *current-ros-package* nil
+  "The ROS package whose system LOAD-SYSTEM is loading.")
 
 (defparameter *ros-package-systems*
   '(("cram_bullet_world_tutorial" . "cram-bullet-world-tutorial")
@@ -16,7 +24,7 @@
     ("cram_object_knowledge" . "cram-object-knowledge")
     ("cram_urdf_projection" . "cram-urdf-projection")
     ("cram_bullet_reasoning" . "cram-bullet-reasoning"))
-  "ROS package name -> the ASDF system that provides it here.")
+  "ROS package name → the ASDF system that provides it in cram-plans.")
 
 (defun ros-package-system-name (ros-package)
   "The ASDF system name for the ROS package ROS-PACKAGE (underscores read as hyphens)."
@@ -26,15 +34,17 @@
   (or (cdr (assoc ros-package *ros-package-systems* :test #'string=))
       (substitute #\- #\_ (string-downcase ros-package))))
 
-(defun load-system (ros-package &optional system)
-  "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
-the one ROS-PACKAGE maps to. Returns the system's name."
-  (let ((name (cond ((null system) (ros-package-system-name ros-package))
-                    ((symbolp system) (string-downcase (symbol-name system)))
-                    ((stringp system) system)
-                    (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system)))))
-    (ros-package-system-name ros-package)
-    (unless (asdf:find-system name nil)
-      (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s." name ros-package))
-    (asdf:load-system name)
-    name))
+(unless (fboundp 'load-system)
+  (defun load-system (ros-package &optional system force)
+    "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
+the one ROS-PACKAGE maps to. FORCE recompiles. Returns the system's name."
+    (let ((name (cond ((null system) (ros-package-system-name ros-package))
+                      ((symbolp system) (string-downcase (symbol-name system)))
+                      ((stringp system) system)
+                      (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system))))
+          (*current-ros-package* ros-package))
+      (ros-package-system-name ros-package)
+      (unless (asdf:find-system name nil)
+        (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s." name ros-package))
+      (asdf:load-system name :force force)
+      name)))
