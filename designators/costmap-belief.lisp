@@ -101,7 +101,7 @@ metadata.  Grids are cached per environment pose and joint state."
   "Rays of a line-of-sight test end this many metres before their target point.")
 
 (defun object-handle-of (object)
-  (and object (btr::object-handle object)))
+  (and object (btr:object-handle object)))
 
 (defun sight-rays (eyes target)
   "Flat double vectors FROM and TO of the rays from the EYES (a list of (x y z) double lists)

@@ -73,10 +73,11 @@ floating point exceptions inside foreign calls otherwise)."
   (error 'native-error :function function :code -2 :message (apply #'format nil fmt args)))
 
 (defmacro ccall (cname &rest args)
-  "Call the foreign function of CNAME with ARGS, traps masked; signal NATIVE-ERROR on a
-negative result, else return the result."
+  "Call the foreign function of CNAME with ARGS, traps masked and interrupts deferred (a plan
+thread that is evaporated never unwinds out of the middle of a native call); signal
+NATIVE-ERROR on a negative result, else return the result."
   (let ((r (gensym "R")) (sym (intern (format nil "%~:@(~a~)" (substitute #\- #\_ cname)))))
-    `(let ((,r (with-float-traps-masked* (,sym ,@args))))
+    `(let ((,r (sb-sys:without-interrupts (with-float-traps-masked* (,sym ,@args)))))
        (declare (type (signed-byte 32) ,r))
        (if (minusp ,r) (signal-native-error ,cname ,r) ,r))))
 

@@ -28,7 +28,9 @@
 
 (declaim (inline anonymous-var-p))
 (defun anonymous-var-p (x)
-  (and (symbolp x) x (string= (symbol-name x) "?_")))
+  (and (symbolp x) x
+       (let ((name (symbol-name x)))
+         (and (= (length name) 2) (char= (char name 0) #\?) (char= (char name 1) #\_)))))
 
 (defun source-var-p (x)
   (is-var x))
@@ -369,7 +371,13 @@ is a symbol, got ~s." clause)))
   "The entry function running CLAUSES, indexed on the first argument when they are many."
   (if (< (length clauses) *index-threshold*)
       (lambda (m args cont) (try-clauses m clauses args cont))
-      (let ((table (make-hash-table :test 'equal))
+      (let ((table (make-hash-table
+                    ;; EQUAL and EQL agree on every key but strings, bit vectors and pathnames
+                    :test (if (some (lambda (c) (and (= 1 (clause-kind c))
+                                                     (typep (clause-key c)
+                                                            '(or string bit-vector pathname))))
+                                    clauses)
+                              'equal 'eql)))
             (var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
             (cons-clauses (remove 1 clauses :key #'clause-kind)))
         ;; bucket per atom key: clauses with that key or a variable first argument, in order

@@ -168,6 +168,24 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
             (funcall (the function fn) m frame cont (machine-cp-top m)))
           (funcall (pred-entry pred) m (cdr goal) cont)))))
 
+(defvar *compiled-goals* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Goal term → (goal-function nvars . env) for goals without pre-bound variables, so that a
+query written as a constant is compiled once.")
+
+(defun compiled-goal (goal)
+  "The goal function, frame and environment of the constant source GOAL, cached by identity."
+  (let ((entry (gethash goal *compiled-goals*)))
+    (if entry
+        (destructuring-bind (fn nvars . env) entry
+          (let ((frame (make-array (the fixnum nvars))))
+            (loop for (sym . i) in env
+                  do (setf (svref frame i) (make-pvar sym)))
+            (values fn frame env)))
+        (multiple-value-bind (fn frame env) (compile-goal-term goal)
+          (when (consp goal)
+            (setf (gethash goal *compiled-goals*) (list* fn (length frame) env)))
+          (values fn frame env)))))
+
 (defun compile-goal-term (goal &optional extra-vars)
   "Compile the term GOAL (its ?symbols being variables) into a goal function; return it, a fresh
 frame holding a new variable for each ?symbol, and the alist symbol → frame index."

@@ -53,8 +53,9 @@ only the first is computed before PROLOG returns."
                               (remove-duplicates (append (term-vars goal) binding-vars)
                                                  :from-end t)))))
     (multiple-value-bind (fn frame env)
-        (compile-goal-term goal (and bindings
-                                     (append binding-vars (term-vars (mapcar #'cdr bindings)))))
+        (if bindings
+            (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
+            (compiled-goal goal))
       (let ((m (make-machine))
             (out (or out (mapcar #'car env)))
             (state :fresh))

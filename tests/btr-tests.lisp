@@ -239,3 +239,9 @@
           (is (< (cl-transforms:angle-between-quaternions (cl-transforms:orientation a)
                                                           (cl-transforms:orientation b))
                  1d-6)))))))
+
+(test collision-group-without-mask
+  (let ((w (fresh-world)))
+    (let ((box (btr:add-object w :box 'wall '((0 0 1) (0 0 0 1)) :size '(1 1 1)
+                               :collision-group :static-filter)))
+      (is (= 2 (cram-native:object-collision-filter (btr:world-handle w) (btr:object-handle box)))))))

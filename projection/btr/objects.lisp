@@ -197,11 +197,11 @@ group and mask, color, types) are rejected by ADD-OBJECT with an error naming th
   (let ((w (whandle object)) (h (object-handle object)))
     (destructuring-bind (&key collision-group collision-mask color &allow-other-keys) keys
       (when (or collision-group collision-mask)
-        (let ((current (native:object-collision-filter w h)))
+        (multiple-value-bind (group mask) (native:object-collision-filter w h)
           (native:set-object-collision-filter
            w h
-           (if collision-group (collision-group-bits collision-group) (aref current 0))
-           (if collision-mask (collision-group-bits collision-mask) (aref current 1)))))
+           (if collision-group (collision-group-bits collision-group) group)
+           (if collision-mask (collision-group-bits collision-mask) mask))))
       (when color
         (native:set-object-color w h (color-rgba color) -1)))))
 

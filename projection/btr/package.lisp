@@ -30,7 +30,7 @@
    #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states
    #:set-robot-state-from-joints #:joint-limits #:joint-lower-limit #:joint-upper-limit
    #:get-robot-object #:get-robot-name #:get-environment-object #:*environment-name*
-   #:robot-object-p #:link-exists-p #:object-handle #:link-index #:joint-index
+   #:robot-object-p #:link-exists-p #:object-handle #:world-lock #:object-kind #:object-spec #:link-index #:joint-index
    #:attach-object #:detach-object #:detach-all-objects #:attached-objects #:object-attached
    #:available-arms
    ;; physics and geometry queries

@@ -130,7 +130,7 @@ fixed joints are folded into the transforms. Errors name unknown links or a brok
                       :reach (coerce reach 'double-float)
                       :native (ignore-errors
                                (cram-native:make-chain (btr:world-handle (btr:world robot))
-                                                       (btr::object-handle robot) base-link tip-link))))))
+                                                       (btr:object-handle robot) base-link tip-link))))))
 
 (defvar *chain-cache* (make-hash-table :test 'equal)
   "(URDF model, base link, tip link) → IK-CHAIN.")

@@ -17,7 +17,7 @@ planes) do not count."
           for other = (if (eq a robot) b a)
           for link = (if (eq a robot) la lb)
           unless (or (member (btr:name other) attached)
-                     (eq (btr::object-kind other) :static-plane)
+                     (eq (btr:object-kind other) :static-plane)
                      (and link (member link ignore-links :test #'string=)))
             do (pushnew (btr:name other) hits))
     (dolist (name attached)

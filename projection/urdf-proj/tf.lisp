@@ -31,7 +31,7 @@ BTR:LINK-NAMES."
 
 (defun link-poses-vector (robot)
   "All link poses of ROBOT as one double vector, 7 per link in BTR:LINK-NAMES order."
-  (cram-native:robot-link-poses (btr:world-handle (btr:world robot)) (btr::object-handle robot)))
+  (cram-native:robot-link-poses (btr:world-handle (btr:world robot)) (btr:object-handle robot)))
 
 (defun vector-transform (v i)
   "The CL-TRANSFORMS:TRANSFORM of pose number I of the pose vector V."
@@ -71,7 +71,7 @@ with the map) and every link under its parent link. Links named in the hash tabl
 
 (defun environment-signature (object)
   (concatenate 'vector
-               (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr::object-handle object))
+               (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr:object-handle object))
                (btr::pose->vector (btr:pose object))))
 
 (defun update-tf-from-belief-state (&key (transformer cram-tf:*transformer*)

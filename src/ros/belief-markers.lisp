@@ -34,8 +34,8 @@ when MESH names no known file."
 
 (defun object-spec (object)
   "The ADD-OBJECT type and keys OBJECT was made with, as (values kind plist)."
-  (values (ignore-errors (btr::object-kind object))
-          (ignore-errors (btr::object-spec object))))
+  (values (btr:object-kind object)
+          (btr:object-spec object)))
 
 (defun scale-list (scale)
   "A mesh SCALE (a real or (sx sy sz)) as a list of three doubles."

@@ -87,7 +87,7 @@ in its parent link's frame, every frame name with PREFIX."
 
 (defun call-with-world-lock (world thunk)
   "Call THUNK holding WORLD's lock, so objects are not added or removed meanwhile."
-  (let ((lock (ignore-errors (btr::world-lock world))))
+  (let ((lock (btr:world-lock world)))
     (if lock
         (bt:with-recursive-lock-held (lock) (funcall thunk))
         (funcall thunk))))
