@@ -23,7 +23,8 @@
                (:file "database")
                (:file "builtins")
                (:file "library")
-               (:file "query")))
+               (:file "query")
+               (:file "documentation")))
 
 (defsystem "cl-transforms"
   :description "3D vectors, quaternions, poses, transforms, stamped poses, a TF buffer (CL-TRANSFORMS, CL-TRANSFORMS-STAMPED, CL-TF, CRAM-TF)."
@@ -250,7 +251,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "prolog-tests")
-               (:file "prolog-builtin-tests")))
+               (:file "prolog-builtin-tests")
+               (:file "prolog-engine-tests")))
 
 (defsystem "cram-plans-tests/transforms"
   :depends-on ("cram-plans-tests/base" "cl-transforms")
@@ -265,7 +267,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "native-tests")
                (:file "native-tests-2")
-               (:file "native-fuzz-tests")))
+               (:file "native-fuzz-tests")
+               (:file "native-ik-tests")))
 
 (defsystem "cram-plans-tests/language"
   :depends-on ("cram-plans-tests/base" "cram-language" "cram-common-failures")

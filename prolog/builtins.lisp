@@ -50,7 +50,7 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
 
 (defun lisp-argument (term)
   "TERM resolved for a call into Lisp: unbound variables appear as their ?symbols."
-  (resolve-term term (lambda (v) (or (pvar-name v) (make-symbol "?_")))))
+  (resolve-term term (lambda (v) (declare (ignore v)) (make-symbol "?_"))))
 
 (defun call-lisp (function args)
   "Apply FUNCTION to ARGS. Returns (values result t), or, when it signals an error and
@@ -64,7 +64,11 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
           (values nil nil)))))
 
 (defun function-designator (term goal)
-  (let ((f (lisp-argument term)))
+  (let ((f (deref term)))
+    (when (or (functionp f)
+              (and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))))
+      (return-from function-designator f))
+    (setf f (lisp-argument f))
     (cond ((functionp f) f)
           ((and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))) f)
           ((and (consp f) (eq (car f) 'function) (symbolp (second f))) (second f))
@@ -88,9 +92,12 @@ function), got ~s." goal f)))))
 
 (macrolet ((compare (name op)
              `(def-native-predicate ,name (m cont a b)
-                (multiple-value-bind (result ok)
-                    (call-lisp #',op (list (lisp-argument a) (lisp-argument b)))
-                  (when (and ok result) (solve-continue cont))))))
+                (let ((x (deref a)) (y (deref b)))
+                  (if (and (realp x) (realp y))
+                      (when (,op x y) (solve-continue cont))
+                      (multiple-value-bind (result ok)
+                          (call-lisp #',op (list (lisp-argument x) (lisp-argument y)))
+                        (when (and ok result) (solve-continue cont))))))))
   (compare < <) (compare > >) (compare <= <=) (compare >= >=))
 
 ;;; Lists
@@ -105,12 +112,18 @@ function), got ~s." goal f)))))
            (and (unify-terms m x (car next)) (funcall (the function cont))))
           (t (setf (machine-cp-top m) index) nil))))
 
+(defun unify-each (m term values cont)
+  "For a native predicate: unify TERM with each element of the list or lazy list VALUES in turn,
+continuing with CONT after each; later elements are reached by backtracking (and computed only
+then). Returns like a native predicate's body."
+  (let ((l (deref values)))
+    (when (consp l)
+      (push-cp m #'member-retry term l cont)
+      (and (unify-terms m term (car l)) (funcall (the function cont))))))
+
 (def-native-predicate member (m cont x list)
   ;; works on lists and on lazy lists, computing their elements only as far as needed
-  (let ((l (deref list)))
-    (when (consp l)
-      (push-cp m #'member-retry x l cont)
-      (and (unify-terms m x (car l)) (solve-continue cont)))))
+  (unify-each m x list cont))
 
 (defun list-value (term goal)
   "The proper (forced if lazy) Lisp list TERM denotes; an error naming GOAL otherwise."
@@ -195,13 +208,21 @@ function), got ~s." goal f)))))
 ;;; Calling Lisp
 
 (def-native-predicate lisp-fun (m cont function &rest args)
-  (let ((spine (resolve-term args)))
-    (unless (and (consp spine) (alexandria:proper-list-p spine))
-      (prolog-error "LISP-FUN needs a function, its arguments and a result variable: ~s."
-                    (list* 'lisp-fun (lisp-argument function) (lisp-argument args))))
+  ;; the arguments but the last go to Lisp; the last is unified with the result
+  (let ((lisp-args '()) (result nil) (spine (deref args)))
+    (loop
+      (unless (consp spine)
+        (prolog-error "LISP-FUN needs a function, its arguments and a result variable: ~s."
+                      (list* 'lisp-fun (lisp-argument function) (lisp-argument args))))
+      (let ((rest (deref (cdr spine))))
+        (when (null rest)
+          (setf result (car spine))
+          (return))
+        (push (lisp-argument (car spine)) lisp-args)
+        (setf spine rest)))
     (multiple-value-bind (value ok)
-        (call-lisp (function-designator function 'lisp-fun) (mapcar #'lisp-argument (butlast spine)))
-      (when (and ok (unify-terms m (car (last spine)) value))
+        (call-lisp (function-designator function 'lisp-fun) (nreverse lisp-args))
+      (when (and ok (unify-terms m result value))
         (solve-continue cont)))))
 
 (def-native-predicate lisp-pred (m cont function &rest args)

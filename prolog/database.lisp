@@ -191,10 +191,7 @@ alist symbol → variable."
      (resolve-term args
                    (lambda (v)
                      (or (car (rassoc v view :test #'eq))
-                         (let* ((name (pvar-name v))
-                                (sym (if (and name (not (assoc name view :test #'eq)))
-                                         name
-                                         (make-symbol (format nil "?~a" (or name "_G"))))))
+                         (let ((sym (make-symbol (format nil "?_G~d" (1+ (length view))))))
                            (push (cons sym v) view)
                            sym))))
      view)))

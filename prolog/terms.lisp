@@ -13,16 +13,21 @@
 (defconstant +unbound+ '+unbound+
   "The value slot of an unbound PVAR.")
 
-(defstruct (pvar (:constructor make-pvar (&optional name))
+(defstruct (pvar (:constructor %make-pvar ())
                  (:copier nil))
-  "A logic variable. VALUE is +UNBOUND+ or the term it is bound to; NAME the source ?symbol."
-  (value +unbound+)
-  (name nil))
+  "A logic variable. VALUE is +UNBOUND+ or the term it is bound to."
+  (value +unbound+))
+
+(declaim (inline make-pvar))
+(defun make-pvar (&optional name)
+  "A fresh unbound variable (NAME, the source ?symbol, is not stored)."
+  (declare (ignore name))
+  (%make-pvar))
 
 (defmethod print-object ((v pvar) stream)
   (if (eq (pvar-value v) +unbound+)
-      (format stream "#<~a>" (or (pvar-name v) "_"))
-      (format stream "#<~a=~s>" (or (pvar-name v) "_") (pvar-value v))))
+      (format stream "#<?_ ~x>" (sb-kernel:get-lisp-obj-address v))
+      (format stream "#<?=~s>" (pvar-value v))))
 
 (declaim (inline deref))
 (defun deref (term)
@@ -36,9 +41,9 @@
 
 (defstruct (machine (:constructor %make-machine))
   "The state of one running query: trail and choice-point stack."
-  (trail (make-array 32) :type simple-vector)
+  (trail #() :type simple-vector)
   (trail-top 0 :type fixnum)
-  (cps (make-array (* 8 +cp-size+)) :type simple-vector)
+  (cps #() :type simple-vector)
   (cp-top 0 :type fixnum))
 
 (defun make-machine ()
@@ -47,7 +52,7 @@
 
 (defun grow-vector (vector)
   (declare (type simple-vector vector))
-  (let ((new (make-array (* 2 (length vector)))))
+  (let ((new (make-array (max 20 (* 2 (length vector))))))
     (replace new vector)
     new))
 
@@ -71,8 +76,7 @@
   (declare (type machine m) (type fixnum mark))
   (let ((trail (machine-trail m)))
     (loop for i of-type fixnum from (1- (machine-trail-top m)) downto mark
-          do (setf (pvar-value (svref trail i)) +unbound+
-                   (svref trail i) 0))
+          do (setf (pvar-value (the pvar (svref trail i))) +unbound+))
     (setf (machine-trail-top m) mark)))
 
 (declaim (inline push-cp))
@@ -123,6 +127,7 @@
 (defun cp-data (m index slot)
   (svref (machine-cps m) (+ (the fixnum index) 2 (the fixnum slot))))
 
+(declaim (inline (setf cp-data)))
 (defun (setf cp-data) (value m index slot)
   (setf (svref (machine-cps m) (+ (the fixnum index) 2 (the fixnum slot))) value))
 
@@ -187,6 +192,6 @@ or are replaced through MAP (a function of the variable) when given. Shares unch
   (let ((map '()))
     (resolve-term term (lambda (v)
                          (or (cdr (assoc v map :test #'eq))
-                             (let ((new (make-pvar (pvar-name v))))
+                             (let ((new (make-pvar)))
                                (push (cons v new) map)
                                new))))))

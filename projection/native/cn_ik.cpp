@@ -358,7 +358,7 @@ int cn_chain_create(int wh, int r, const char *base, const char *tip) {
         k.axis.normalize();
         k.prismatic = jm.type == CN_JOINT_PRISMATIC;
         for (int a = 0; a < 3; ++a)
-          if (std::fabs(std::fabs(k.axis(a)) - 1) < 1e-15) {
+          if (k.axis((a + 1) % 3) == 0 && k.axis((a + 2) % 3) == 0) {
             k.unit_axis = a;
             k.unit_sign = k.axis(a) > 0 ? 1 : -1;
           }

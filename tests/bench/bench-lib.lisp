@@ -2,7 +2,7 @@
 
 (defpackage :cram-bench
   (:use :cl)
-  (:export #:median-seconds #:time-per-call #:run-peer #:add-row #:print-table
+  (:export #:now-seconds #:median-seconds #:time-per-call #:run-peer #:add-row #:print-table
            #:define-benchmark #:run-benchmarks #:format-seconds))
 
 (in-package :cram-bench)
@@ -10,14 +10,18 @@
 (defvar *rows* '() "Rows collected in this run, newest first.")
 (defvar *benchmarks* '() "Registered benchmarks as (name . function), in order of definition.")
 
+(defun now-seconds ()
+  "Wall clock in seconds with microsecond resolution."
+  (multiple-value-bind (s us) (sb-ext:get-time-of-day)
+    (+ s (* us 1d-6))))
+
 (defun median-seconds (thunk &key (runs 7) (warmup 1))
   "Call THUNK WARMUP times, then RUNS times; return the median wall time of one call in seconds."
   (loop repeat warmup do (funcall thunk))
   (let ((times (loop repeat runs
-                     collect (let ((start (get-internal-real-time)))
+                     collect (let ((start (now-seconds)))
                                (funcall thunk)
-                               (/ (- (get-internal-real-time) start)
-                                  (float internal-time-units-per-second 1d0))))))
+                               (- (now-seconds) start)))))
     (nth (floor runs 2) (sort times #'<))))
 
 (defun time-per-call (thunk &key (min-seconds 0.2d0) (runs 5))

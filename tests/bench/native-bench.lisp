@@ -59,6 +59,86 @@ of raw_bench.cpp."
                                    (ratio (<= ratio goal-ratio))
                                    (t :unknown)))))
 
+;;; IK on random reachable poses of the PR2 arms
+
+(defparameter *ik-urdf*
+  (let ((own (asdf:system-relative-pathname "cram-native" "robots/pr2/pr2.urdf")))
+    (if (probe-file own) own *pr2-urdf*))
+  "The PR2 model of the IK benchmark.")
+
+(defparameter *ik-poses* 1000 "Random reachable poses per arm.")
+(defparameter *ik-peer-poses* 300 "Poses per arm solved by the KDL peer.")
+
+(defun ik-peer-times ()
+  "Alist (\"kdl-mean:TIP\" . seconds) etc. from tests/bench/native/ik_bench.cpp: KDL's LMA
+solver with random restarts on the same kind of poses, or NIL when it cannot run."
+  (ignore-errors
+   (let ((out (cram-bench:run-peer (namestring (merge-pathnames "build/ik_bench" *native-dir*))
+                                   (namestring *ik-urdf*) "--machine" "--poses" "1"
+                                   "--peer" (princ-to-string *ik-peer-poses*)
+                                   "--search-dir" "/work/shared/models"
+                                   "--tip" "l_wrist_roll_link" "--tip" "r_wrist_roll_link")))
+     (when out
+       (with-input-from-string (s out)
+         (loop for line = (read-line s nil) while line
+               collect (let ((sp (position #\Space line)))
+                         (cons (subseq line 0 sp)
+                               (let ((*read-default-float-format* 'double-float))
+                                 (coerce (read-from-string (subseq line (1+ sp))) 'double-float))))))))))
+
+(defun wall-seconds ()
+  "Wall-clock time in seconds, to the microsecond."
+  (multiple-value-bind (sec usec) (sb-ext:get-time-of-day)
+    (+ sec (* 1d-6 usec))))
+
+(defun ik-arm-row (w r side tip peers)
+  "Solve *IK-POSES* random reachable poses of the chain torso_lift_link -> TIP from random
+seeds within the limits; add a row with the mean time, the solved share and the worst errors."
+  (let* ((c (make-chain w r "torso_lift_link" tip))
+         (state (sb-ext:seed-random-state 7))
+         (n *ik-poses*) (solved 0) (worst-pos 0d0) (worst-rot 0d0))
+    (unwind-protect
+         (multiple-value-bind (lo hi) (chain-limits c)
+           (flet ((draw () (map '(simple-array double-float (*))
+                                (lambda (a b) (+ a (random (- b a) state))) lo hi)))
+             (let* ((targets (loop repeat n collect (chain-fk c (draw))))
+                    (seeds (loop repeat n collect (draw)))
+                    (results (make-array n))
+                    (t0 (wall-seconds)))
+               (loop for k from 0 for target in targets for seed in seeds
+                     do (setf (aref results k)
+                              (multiple-value-list (chain-ik c target :seed seed :random-seed (1+ k)))))
+               (let ((mean (/ (- (wall-seconds) t0) n))
+                     (peer (cdr (assoc (format nil "kdl-mean:~a" tip) peers :test #'string=)))
+                     (peer-solved (cdr (assoc (format nil "kdl-solved:~a" tip) peers :test #'string=))))
+                 (loop for (sol err) across results
+                       when sol
+                         do (incf solved)
+                            (setf worst-pos (max worst-pos (aref err 0))
+                                  worst-rot (max worst-rot (aref err 1))))
+                 (let ((*read-default-float-format* 'double-float))
+                   (cram-bench:add-row
+                    (format nil "native: PR2 ~a arm IK (~d random reachable poses, random seeds)" side n)
+                    (format nil "~a, ~,1f% solved, worst ~,1e m ~,1e rad" (cram-bench:format-seconds mean)
+                            (* 100 (/ solved n)) worst-pos worst-rot)
+                    :peer-name (and peer "KDL LMA, 100 it x 200 restarts")
+                    :peer (and peer (format nil "~a, ~,1f% solved" (cram-bench:format-seconds peer)
+                                            (* 100 (or peer-solved 0))))
+                    :ratio (and peer (/ mean peer))
+                    :goal "<= 300 µs, >= 99%"
+                    :met (and (<= mean 300d-6) (>= (/ solved n) 0.99))))))))
+      (destroy-chain c))))
+
+(defun ik-rows ()
+  "The IK rows of the native benchmark (both PR2 arms)."
+  (when (probe-file *ik-urdf*)
+    (add-search-dir "/work/shared/models")
+    (let ((peers (ik-peer-times)))
+      (with-world (w)
+        (let ((r (add-urdf w (uiop:read-file-string *ik-urdf*))))
+          (ik-arm-row w r "left" "l_wrist_roll_link" peers)
+          (ik-arm-row w r "right" "r_wrist_roll_link" peers))))))
+
 (cram-bench:define-benchmark native ()
   (let ((raw (raw-times)))
     (multiple-value-bind (w r boxes) (build-scene)
@@ -111,25 +191,4 @@ of raw_bench.cpp."
                       "png" raw :goal-ratio nil)
                  (ignore-errors (delete-file png)))))
         (destroy-world w)))
-    (when (probe-file *pr2-urdf*)
-      (add-search-dir "/work/shared/models")
-      (with-world (w)
-        (let* ((r (add-urdf w (uiop:read-file-string *pr2-urdf*)))
-               (c (make-chain w r "torso_lift_link" "r_wrist_roll_link"))
-               (state (sb-ext:seed-random-state 7))
-               (n 300) (solved 0) (total 0d0))
-          (multiple-value-bind (lo hi) (chain-limits c)
-            (dotimes (k n)
-              (let* ((q (map '(simple-array double-float (*))
-                             (lambda (a b) (+ a (random (- b a) state))) lo hi))
-                     (target (chain-fk c q))
-                     (t0 (get-internal-real-time))
-                     (sol (chain-ik c target :random-seed (1+ k))))
-                (incf total (/ (- (get-internal-real-time) t0) (float internal-time-units-per-second 1d0)))
-                (when sol (incf solved)))))
-          (destroy-chain c)
-          (cram-bench:add-row "native: PR2 right arm IK (mean, random reachable poses)"
-                              (format nil "~a, ~,1f% solved" (cram-bench:format-seconds (/ total n))
-                                      (* 100 (/ solved n)))
-                              :goal "<= 300 µs, >= 99%"
-                              :met (and (<= (/ total n) 300d-6) (>= (/ solved n) 0.99))))))))
+    (ik-rows)))

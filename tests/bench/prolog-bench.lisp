@@ -41,9 +41,9 @@
   (<- (nrev (?h . ?t) ?r) (nrev ?t ?rt) (app ?rt (?h) ?r))
   (<- (bench-loop 0 ?_) (cut))
   (<- (bench-loop ?n ?l) (nrev ?l ?_) (lisp-fun 1- ?n ?n1) (bench-loop ?n1 ?l))
-  (<- (dummy-loop 0 ?_) (cut))
-  (<- (dummy-loop ?n ?l) (dummy ?l ?_) (lisp-fun 1- ?n ?n1) (dummy-loop ?n1 ?l))
-  (<- (dummy ?_ ?_)))
+  (<- (control-loop 0 ?_) (cut))
+  (<- (control-loop ?n ?l) (ignore-both ?l ?_) (lisp-fun 1- ?n ?n1) (control-loop ?n1 ?l))
+  (<- (ignore-both ?_ ?_)))
 
 (defun cpu-seconds (thunk)
   (let ((start (get-internal-run-time)))
@@ -55,8 +55,8 @@
   (let ((list (loop for i from 1 to 30 collect i)))
     (sb-ext:gc :full t)
     (let ((loop-time (cpu-seconds (lambda () (prolog `(bench-loop ,n ,list)))))
-          (dummy-time (cpu-seconds (lambda () (prolog `(dummy-loop ,n ,list))))))
-      (/ (* 496 n) (max 1d-9 (- loop-time dummy-time))))))
+          (control-time (cpu-seconds (lambda () (prolog `(control-loop ,n ,list))))))
+      (/ (* 496 n) (max 1d-9 (- loop-time control-time))))))
 
 (defun swi-nrev-lips ()
   (let ((out (run-peer "swipl" "-O" (bench-script "bench_nrev.pl"))))
