@@ -339,7 +339,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans-tests/designators" "cram-plans-tests/executive"
                "cram-plans-tests/costmap"
                "cram-plans-tests/btr" "cram-plans-tests/scripts"
-               "cram-plans-tests/ros" "cram-plans-tests/urdf-proj"))
+               "cram-plans-tests/ros" "cram-plans-tests/urdf-proj"
+               "cram-plans-tests/plans"))
 
 ;;; Plans, object knowledge, tutorials and demos.
 
@@ -391,3 +392,8 @@ bottles."
                (:file "pepper-shelf-prolog")
                (:file "pepper-plans")
                (:file "pepper-search")))
+
+(defsystem "cram-plans-tests/plans"
+  :depends-on ("cram-plans-tests/base" "cram-bullet-world-tutorial" "cram-pepper-demo")
+  :pathname "tests/"
+  :components ((:file "plans-tests")))

@@ -65,9 +65,10 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
 
 (defun function-designator (term goal)
   (let ((f (deref term)))
-    (when (or (functionp f)
-              (and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))))
+    (when (functionp f)
       (return-from function-designator f))
+    (when (and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f)))
+      (return-from function-designator (symbol-function f)))
     (setf f (lisp-argument f))
     (cond ((functionp f) f)
           ((and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))) f)

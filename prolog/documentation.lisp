@@ -56,3 +56,6 @@
         (warn "(warn control arg...): signals a warning and succeeds.")
         (error "(error control arg...): signals an error."))
       do (setf (gethash functor *predicate-documentation*) doc))
+
+(setf (gethash 'predicate *predicate-documentation*)
+      "The documentation type of predicates: (DOCUMENTATION 'ONCE 'PROLOG:PREDICATE) describes ONCE.")

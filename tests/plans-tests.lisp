@@ -1,0 +1,132 @@
+;;;; Tests of the plans layer: object knowledge, groundings, move-bottle with its recoveries,
+;;;; switching two bottles and the Pepper shopping assistant.
+
+(defpackage :cram-plans-tests-plans
+  (:use :cl :fiveam))
+
+(in-package :cram-plans-tests-plans)
+
+(def-suite plans :in cram-plans-tests:all :description "Plans, tutorials and demos.")
+(in-suite plans)
+
+(defun run-logged (thunk)
+  "Call THUNK with the CPL log captured; returns its value (or the error) and the log text."
+  (let* ((s (make-string-output-stream))
+         (value (let ((cpl:*log-stream* s))
+                  (handler-case (funcall thunk) (error (e) e)))))
+    (values value (get-output-stream-string s))))
+
+(defun bottle-distance ()
+  (cl-transforms:v-dist (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world*
+                                                                     'btw-tut::bottle-1)))
+                        (cl-transforms:origin btw-tut:*final-object-destination*)))
+
+(test bottle-grasps
+  (is (equal '(:left-side :right-side :back :front) (man-int:object-type-grasps :bottle)))
+  (is (null (member :top (man-int:object-type-grasps :bottle))))
+  (is (member :top (man-int:object-type-grasps :cup)))
+  (is (= 20 (man-int:get-object-type-gripping-effort :milk)))
+  (is (= 0.05 (man-int:get-object-type-gripper-opening :fork-plastic)))
+  (signals man-int:manipulation-knowledge-error (man-int:object-type-grasps :unicorn))
+  (signals man-int:manipulation-knowledge-error
+    (man-int:get-object-type-to-gripper-transform :bottle nil :right :top)))
+
+(test bottle-trajectory
+  (let* ((pose (cl-transforms:make-pose (cl-transforms:make-3d-vector 1 2 0.9)
+                                        (cl-transforms:make-identity-rotation)))
+         (traj (man-int:get-action-trajectory :picking-up :right :left-side :bottle pose))
+         (grasp (first (man-int:get-traj-poses-by-label traj :grasping)))
+         (reach (man-int:get-traj-poses-by-label traj :reaching))
+         (lift (man-int:get-traj-poses-by-label traj :lifting)))
+    (is (= 2 (length reach)))
+    (is (< (abs (- 2.02 (cl-transforms:y (cl-transforms:origin grasp)))) 1d-6))
+    (is (< (abs (- 0.905 (cl-transforms:z (cl-transforms:origin grasp)))) 1d-6))
+    ;; the first pregrasp is 0.15 m back (+y for a left-side grasp) and 0.07 m up
+    (is (< (abs (- 2.17 (cl-transforms:y (cl-transforms:origin (first reach))))) 1d-6))
+    (is (< (abs (- 0.975 (cl-transforms:z (cl-transforms:origin (first reach))))) 1d-6))
+    (is (< (abs (- 1.045 (cl-transforms:z (cl-transforms:origin (second lift))))) 1d-6))
+    (signals man-int:manipulation-knowledge-error
+      (man-int:get-traj-poses-by-label traj :putting))))
+
+(test action-grounding-errors
+  (btw-tut:init-projection)
+  (let ((d (desig:an action (type picking-up) (arm :right))))
+    (signals error (exe:perform d)))
+  (let ((d (desig:an action (type moving-torso) (joint-angle :high))))
+    (signals error (desig:reference d) (exe:perform d))))
+
+(test move-bottle-in-view
+  (btw-tut:init-projection)
+  (multiple-value-bind (value log) (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-in-view*)))
+    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
+    (is (< (bottle-distance) 0.03))
+    (dolist (line '("Opening gripper and reaching" "Grasping" "Gripping"
+                    "Assert grasp into knowledge base" "Lifting" "Putting"
+                    "Retract grasp in knowledge base" "Retracting"))
+      (is (search line log) "log lacks ~s" line))
+    (is (search "[(PICK-PLACE PICK-UP) INFO] " log))
+    (is (null (search "Turning head." log)))))
+
+(test move-bottle-out-of-view
+  (btw-tut:init-projection)
+  (multiple-value-bind (value log)
+      (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-out-of-view*)))
+    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
+    (is (< (bottle-distance) 0.03))
+    (is (search "Turning head." log))))
+
+(test move-bottle-hard-to-grasp
+  (btw-tut:init-projection)
+  (multiple-value-bind (value log)
+      (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-hard-to-grasp*)))
+    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
+    (is (< (bottle-distance) 0.03))
+    (is (or (search "Trying to grasp from" log) (search "Trying the " log))
+        "no arm or grasp recovery in the log")))
+
+(test switch-two-bottles
+  (btw-tut:init-projection)
+  (let ((value (run-logged #'btw-tut:test-switch-two-bottles)))
+    (is (listp value) "switching failed: ~a" value)
+    (flet ((at (name pose)
+             (let ((p (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* name))))
+                   (q (cl-transforms:origin pose)))
+               (< (sqrt (+ (expt (- (cl-transforms:x p) (cl-transforms:x q)) 2)
+                           (expt (- (cl-transforms:y p) (cl-transforms:y q)) 2)))
+                  0.03))))
+      (is (at 'btw-tut::bottle-1 btw-tut:*pose-bottle-2*))
+      (is (at 'btw-tut::bottle-2 btw-tut:*pose-bottle-1*)))))
+
+(defun run-interaction (input &key remove)
+  (demo:init-projection)
+  (demo:spawn-products-one)
+  (dolist (name remove) (btr:remove-object btr:*current-bullet-world* name))
+  (let* ((out (make-string-output-stream))
+         (values (let ((*standard-input* (make-string-input-stream input))
+                       (*standard-output* out)
+                       (cpl:*log-stream* (make-broadcast-stream)))
+                   (multiple-value-list (demo:interaction)))))
+    (values values (get-output-stream-string out))))
+
+(test pepper-cereal
+  (multiple-value-bind (values text) (run-interaction "1 1")
+    (is (eq 'demo::cereal (first values)))
+    (is (second values))
+    (is (search "There is your product!" text))
+    (let ((human (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* :my-human)))))
+      (is (> (cl-transforms:v-dist human (cl-transforms:make-3d-vector -1 0 1)) 0.5)))))
+
+(test pepper-milk
+  (multiple-value-bind (values text) (run-interaction "1 2")
+    (is (eq 'demo::milk (first values)))
+    (is (search "There is your product!" text))))
+
+(test pepper-hi
+  (multiple-value-bind (values text) (run-interaction "2")
+    (is (null (first values)))
+    (is (search "That's nice of you. Thanks!" text))))
+
+(test pepper-not-found
+  (multiple-value-bind (values text) (run-interaction "1 2" :remove '(:my-milk1 :my-milk2))
+    (is (null (second values)))
+    (is (search "Sorry I could not find your product" text))))

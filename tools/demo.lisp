@@ -1,0 +1,103 @@
+;;;; Headless demos of cram-plans: (cram-plans-demo:main "out") runs move-bottle in
+;;;; projection, writes pictures and the task tree, and exits 0 when the bottle arrived.
+;;;; (cram-plans-demo:run-command-line args) is the entry of tools/cram-plans-run.
+
+(require :asdf)
+(let ((root (merge-pathnames "../" (make-pathname :name nil :type nil
+                                                   :defaults (or *load-truename* *default-pathname-defaults*)))))
+  (handler-bind ((warning #'muffle-warning))
+    (asdf:load-asd (merge-pathnames "cram-plans.asd" root))
+    (asdf:load-system "cram-bullet-world-tutorial")
+    (asdf:load-system "cram-pepper-demo")
+    (asdf:load-system "yason")))
+
+(defpackage :cram-plans-demo
+  (:use :cl)
+  (:export #:main #:run-command-line #:run-move-bottle #:random-bottle-pose #:run-batch
+           #:summarize #:read-json-lines #:*tolerance*))
+
+(in-package :cram-plans-demo)
+
+(defparameter *tolerance* 0.03
+  "Metres within which the bottle must end at BTW-TUT:*FINAL-OBJECT-DESTINATION*.")
+
+(defun distance-to-destination ()
+  (let ((o (btr:object btr:*current-bullet-world* 'btw-tut::bottle-1)))
+    (if o
+        (cl-transforms:v-dist (cl-transforms:origin (btr:pose o))
+                              (cl-transforms:origin btw-tut:*final-object-destination*))
+        most-positive-double-float)))
+
+(defun parse-log (text)
+  "Counts of the recoveries and failures a move-bottle log shows."
+  (flet ((count-of (needle)
+           (loop with start = 0 for pos = (search needle text :start2 start)
+                 while pos count t do (setf start (1+ pos)))))
+    (list :look-direction (count-of "Turning head.")
+          :new-grasp (count-of "Trying to grasp from")
+          :new-arm (count-of "Trying the ")
+          :grasp-failure (count-of "[(GRASP-FAILURE) WARN]")
+          :perception-failure (count-of "[(PERCEPTION-FAILURE) WARN]"))))
+
+(defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*))
+  "Run move-bottle with the bottle at POSE in a fresh belief state. Returns a plist: :success,
+:distance, :seconds, :error, the recovery counts of the log, and :log."
+  (btw-tut:init-projection)
+  (let* ((btr:*snapshot-directory* (and pictures out-dir (namestring out-dir)))
+         (captured (make-string-output-stream))
+         (stream (make-broadcast-stream captured log-stream))
+         (start (get-internal-real-time))
+         (error nil))
+    (when (and pictures out-dir)
+      (btw-tut::spawn-bottle pose)
+      (btr:png-snapshot (merge-pathnames "start.png" out-dir) :look-at '(-1.5 -0.7 0.8)))
+    (let ((cpl:*log-stream* stream))
+      (handler-case
+          (progn
+            (btw-tut:move-bottle pose))
+        (error (e) (setf error (princ-to-string e)))))
+    (let* ((seconds (/ (- (get-internal-real-time) start) internal-time-units-per-second))
+           (distance (distance-to-destination))
+           (log (get-output-stream-string captured)))
+      (append (list :success (and (null error) (<= distance *tolerance*))
+                    :distance (if (< distance 1d6) distance nil)
+                    :seconds (float seconds 1d0)
+                    :error error)
+              (parse-log log)
+              (list :log log)))))
+
+(defmethod coe:on-event grasped-snapshot ((event cpoe:object-attached-robot))
+  (let ((dir btr:*snapshot-directory*))
+    (when (and dir (boundp '*snapshot-grasped*) (symbol-value '*snapshot-grasped*))
+      (btr:png-snapshot (merge-pathnames "grasped.png" (uiop:ensure-directory-pathname dir))
+                        :look-at '(-1.5 -0.5 0.9)))))
+
+(defvar *snapshot-grasped* nil "When true, the first grasp of a run writes grasped.png.")
+(pushnew '*snapshot-grasped* cpl:*inherited-specials*)
+(pushnew 'btr:*snapshot-directory* cpl:*inherited-specials*)
+
+(defun write-task-tree (out-dir)
+  (let ((tree cpl:*last-task-tree*))
+    (when tree
+      (with-open-file (s (merge-pathnames "task-tree.json" out-dir) :direction :output
+                                                                     :if-exists :supersede)
+        (write-string (cpl:task-tree-to-json tree) s))
+      (cpl:write-task-tree-html (merge-pathnames "task-tree.html" out-dir) tree))))
+
+(defun main (out-dir &key (pose btw-tut:*bottle-pose-in-view*))
+  "Run move-bottle headless with the bottle at POSE, print the CRAM-style log, write
+start.png, grasped.png, placed.png, task-tree.json and task-tree.html to OUT-DIR and exit with
+status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
+  (let* ((dir (uiop:ensure-directory-pathname (merge-pathnames out-dir (uiop:getcwd))))
+         (result (progn (ensure-directories-exist dir)
+                        (let ((*snapshot-grasped* t))
+                          (run-move-bottle pose :out-dir dir)))))
+    (btr:png-snapshot (merge-pathnames "placed.png" dir) :look-at '(-0.8 2.0 0.9))
+    (handler-case (write-task-tree dir)
+      (error (e) (format t "~&Task tree not written: ~a~%" e)))
+    (format t "~&~:[FAILURE~;SUCCESS~]: bottle ~@[~,3f m~] from the destination (tolerance ~a m)~
+               ~@[; error: ~a~]~%Pictures and task tree in ~a~%"
+            (getf result :success) (getf result :distance) *tolerance* (getf result :error)
+            (namestring dir))
+    (finish-output)
+    (uiop:quit (if (getf result :success) 0 1))))
