@@ -376,7 +376,8 @@ bottles."
                "cram-language" "cram-common-failures" "cram-executive"
                "cram-robot-interfaces" "cram-bullet-reasoning" "cram-pr2-description"
                "cram-location-costmap" "cram-common-designators" "cram-urdf-projection"
-               "cram-object-knowledge" "cram-mobile-pick-place-plans" "ros-load")
+               "cram-object-knowledge" "cram-mobile-pick-place-plans" "ros-load"
+               "roslisp-utilities")
   :pathname "src/tutorials/"
   :serial t
   :components ((:file "btw-tut-setup")

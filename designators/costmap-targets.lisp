@@ -85,12 +85,27 @@ or a 3D-VECTOR."
     (t (error "Location target ~s: expected an object or location designator, a pose or a point."
               value))))
 
+(defun object-designator-placed-p (designator &optional (world btr:*current-bullet-world*))
+  "True when the object DESIGNATOR says where its object is: a belief-state object, a perceived
+pose or a LOCATION property."
+  (let* ((effective (desig:newest-effective-designator designator))
+         (data (and effective (desig:designator-data effective))))
+    (or (object-designator-world-object designator world)
+        (and data (ignore-errors (desig:object-pose data)))
+        (desig:desig-prop-value designator :location))))
+
 (defun designator-target (designator)
   "(values point object) that a VISIBLE-FOR or REACHABLE-FOR DESIGNATOR is about: its OBJECT,
-LOCATION or TARGET property."
-  (let ((value (or (desig:desig-prop-value designator :object)
-                   (desig:desig-prop-value designator :location)
-                   (desig:desig-prop-value designator :target))))
+LOCATION or TARGET property. An OBJECT that says nothing about where it is, such as (an object
+(type :shelf)) next to a LOCATION, only qualifies what is looked at: the LOCATION (or TARGET)
+is the place then."
+  (let* ((object (desig:desig-prop-value designator :object))
+         (place (or (desig:desig-prop-value designator :location)
+                    (desig:desig-prop-value designator :target)))
+         (value (if (and place (typep object 'desig:object-designator)
+                         (not (object-designator-placed-p object)))
+                    place
+                    (or object place))))
     (unless value
       (error "The location designator ~a needs an OBJECT, LOCATION or TARGET property to say ~
               what the robot should see or reach." designator))

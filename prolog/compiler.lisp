@@ -7,6 +7,10 @@
 ;;;; function of no arguments); a goal that fails returns NIL. Every call of a continuation or a
 ;;;; predicate is a tail call, so a deterministic recursion runs in constant Lisp stack. BARRIER
 ;;;; is the choice-point height a cut in the body returns to.
+;;;;
+;;;; Heads are matched in the machine's scratch frame, so a clause whose head does not match
+;;;; allocates nothing; a clause with a body then gets its own frame, except when the body is a
+;;;; single predicate call, which builds its arguments from the scratch frame at once.
 
 (in-package :cram-prolog)
 
@@ -21,8 +25,10 @@
   (kind 0 :type fixnum)   ; first argument: 0 variable/none, 1 atom, 2 cons
   (key nil)               ; the atom when KIND is 1
   (nvars 0 :type fixnum)
+  (nhead 0 :type fixnum)  ; frame slots 0 .. NHEAD-1 hold the head's variables
   (match nil :type function)
   (init '() :type list)   ; ((index . name) ...) of body-only variables
+  (frameless nil)         ; the body is one predicate call: it runs in the head's frame
   (body nil)              ; NIL for a fact
   (source nil))
 
@@ -117,7 +123,8 @@ list spines iteratively."
   `(let ((d ,datum))
      (case ,kind
        (0 (setf (svref ,frame d) ,x) t)
-       (1 (unify-terms ,m (svref ,frame d) ,x))
+       (1 (let ((y (deref (svref ,frame d))) (x (deref ,x)))
+            (or (eq x y) (unify-terms ,m y x))))
        (2 t)
        (3 (let ((x (deref ,x)))
             (cond ((eq x d) t)
@@ -198,6 +205,33 @@ constant, 2 anonymous, 3 a builder closure."
 ;;; Argument lists: the common case of a proper list of arguments gets one loop instead of a
 ;;; chain of closures, with variables and atoms handled inline.
 
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter *unrolled-arities* '(1 2 3 4)
+    "Argument counts whose matchers and builders are compiled without a loop."))
+
+(defmacro unrolled-args-matcher (n kinds data suffixes)
+  "A matcher of N arguments from the classified elements in the vectors KINDS, DATA, SUFFIXES."
+  (let ((ks (loop repeat n collect (gensym "K")))
+        (ds (loop repeat n collect (gensym "D")))
+        (ss (loop repeat n collect (gensym "S"))))
+    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
+           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i)))
+           ,@(loop for s in ss for i from 0 collect `(,s (svref ,suffixes ,i))))
+       (declare (type fixnum ,@ks) (type function ,@ss))
+       (lambda (m frame args)
+         (declare (type simple-vector frame))
+         (let ((a args))
+           (block match
+             ,@(loop for k in ks for d in ds for s in ss
+                     collect `(setf a (deref a))
+                     collect `(unless (consp a)
+                                (return-from match (and (pvar-p a) (funcall ,s m frame a))))
+                     collect `(unless (match-element ,k ,d m frame (car a))
+                                (return-from match nil))
+                     collect `(setf a (cdr a)))
+             (let ((a (deref a)))
+               (or (null a) (and (pvar-p a) (bind-var m a nil))))))))))
+
 (defun compile-args-match (patterns)
   "Like COMPILE-MATCH for a whole argument list PATTERNS."
   (if (or (not (alexandria:proper-list-p patterns)) (null patterns))
@@ -216,38 +250,69 @@ constant, 2 anonymous, 3 a builder closure."
                    (setf *seen* seen))
                  (multiple-value-bind (kind datum) (classify-match-element p)
                    (setf (aref kinds i) kind (svref data i) datum)))
-        (lambda (m frame args)
-          (declare (type simple-vector frame))
-          (let ((a args))
-            (dotimes (i k (let ((a (deref a)))
-                            (or (null a) (and (pvar-p a) (bind-var m a nil)))))
-              (setf a (deref a))
-              (unless (consp a)
-                (return (and (pvar-p a) (funcall (the function (svref suffixes i)) m frame a))))
-              (let ((x (car a)))
-                (unless (match-element (aref kinds i) (svref data i) m frame x)
-                  (return nil)))
-              (setf a (cdr a))))))))
+        (macrolet ((by-arity ()
+                     `(case k
+                        ,@(loop for n in *unrolled-arities*
+                                collect `(,n (unrolled-args-matcher ,n kinds data suffixes)))
+                        (t
+                         (lambda (m frame args)
+                           (declare (type simple-vector frame))
+                           (let ((a args))
+                             (dotimes (i k (let ((a (deref a)))
+                                             (or (null a) (and (pvar-p a) (bind-var m a nil)))))
+                               (setf a (deref a))
+                               (unless (consp a)
+                                 (return (and (pvar-p a)
+                                              (funcall (the function (svref suffixes i))
+                                                       m frame a))))
+                               (let ((x (car a)))
+                                 (unless (match-element (aref kinds i) (svref data i) m frame x)
+                                   (return nil)))
+                               (setf a (cdr a)))))))))
+          (by-arity)))))
+
+(defun classify-args-build (patterns)
+  "Kinds and data vectors of BUILD-ELEMENT for the proper argument list PATTERNS all of whose
+variables have values, or NIL when PATTERNS is not of that form."
+  (unless (or (not (alexandria:proper-list-p patterns)) (null patterns)
+              (not (has-source-vars-p patterns))
+              (some (lambda (v) (not (member v *seen* :test #'eq))) (term-vars patterns)))
+    (let* ((k (length patterns))
+           (kinds (make-array k :element-type 'fixnum))
+           (data (make-array k)))
+      (loop for p in patterns
+            for i from 0
+            do (multiple-value-bind (kind datum) (classify-build-element p)
+                 (setf (aref kinds i) kind (svref data i) datum)))
+      (values kinds data))))
+
+(defmacro with-unrolled-build ((n kinds data frame args-var) &body body)
+  "BODY with ARGS-VAR bound to the list of the N elements built from KINDS and DATA, in a
+LAMBDA (M FRAME CONT BARRIER) built around BODY."
+  (let ((ks (loop repeat n collect (gensym "K")))
+        (ds (loop repeat n collect (gensym "D"))))
+    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
+           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
+       (declare (type fixnum ,@ks))
+       (lambda (m ,frame cont barrier)
+         (declare (type simple-vector ,frame) (ignorable barrier))
+         (let ((,args-var (list ,@(loop for k in ks for d in ds
+                                         collect `(build-element ,k ,d ,frame)))))
+           ,@body)))))
 
 (defun compile-args-build (patterns)
   "Like COMPILE-BUILD for a whole argument list PATTERNS, all of whose variables have values."
-  (if (or (not (alexandria:proper-list-p patterns)) (null patterns)
-          (not (has-source-vars-p patterns))
-          (some (lambda (v) (not (member v *seen* :test #'eq))) (term-vars patterns)))
-      (compile-build patterns)
-      (let* ((k (length patterns))
-             (kinds (make-array k :element-type 'fixnum))
-             (data (make-array k)))
-        (loop for p in patterns
-              for i from 0
-              do (multiple-value-bind (kind datum) (classify-build-element p)
-                   (setf (aref kinds i) kind (svref data i) datum)))
-        (lambda (frame)
-          (declare (type simple-vector frame))
-          (let ((result '()))
-            (loop for i of-type fixnum from (1- k) downto 0
-                  do (push (build-element (aref kinds i) (svref data i) frame) result))
-            result)))))
+  (multiple-value-bind (kinds data) (classify-args-build patterns)
+    (if (null kinds)
+        (compile-build patterns)
+        (let ((k (length kinds)))
+          (declare (type (simple-array fixnum (*)) kinds) (type simple-vector data))
+          (lambda (frame)
+            (declare (type simple-vector frame))
+            (let ((result '()))
+              (loop for i of-type fixnum from (1- k) downto 0
+                    do (push (build-element (aref kinds i) (svref data i) frame) result))
+              result))))))
 
 (defun check-clause (clause)
   (unless (and (consp clause) (consp (car clause)) (car (car clause))
@@ -263,15 +328,24 @@ is a symbol, got ~s." clause)))
         (*seen* '()))
     (destructuring-bind (head . body) clause
       (let* ((match (compile-args-match (cdr head)))
+             (nhead *nvars*)
              (init (loop for v in (term-vars body)
                          unless (member v *seen* :test #'eq)
                            collect (prog1 (cons (var-index v) v) (push v *seen*))))
              (body-fn (and body (compile-body body)))
+             (frameless (and body (null (cdr body)) (plain-call-p (car body))))
              (first (if (consp (cdr head)) (cadr head) '?_)))
         (make-clause :kind (cond ((source-var-p first) 0) ((consp first) 2) (t 1))
                      :key (if (or (source-var-p first) (consp first)) nil first)
-                     :nvars *nvars* :match match :init init :body body-fn
+                     :nvars *nvars* :nhead nhead :frameless frameless :match match :init init :body body-fn
                      :source clause)))))
+
+(defun plain-call-p (goal)
+  "True when the source GOAL compiles to a call of a predicate (not a control construct): its
+goal function reads the frame only to build the call's arguments, before calling."
+  (and (consp goal)
+       (car goal) (symbolp (car goal)) (not (source-var-p (car goal)))
+       (not (pred-control (resolve-functor (car goal))))))
 
 (defun compile-body (goals)
   "A goal function running the conjunction GOALS."
@@ -297,15 +371,32 @@ is a symbol, got ~s." clause)))
          (let ((pred (resolve-functor (car goal))))
            (if (pred-control pred)
                (funcall (the function (pred-control pred)) (cdr goal))
-               (let ((build (compile-args-build (cdr goal))))
-                 (declare (type function build))
-                 (lambda (m frame cont barrier)
-                   (declare (ignore barrier))
-                   (funcall (pred-entry pred) m (funcall build frame) cont))))))))
+               (multiple-value-bind (kinds data) (classify-args-build (cdr goal))
+                 (macrolet ((by-arity ()
+                              `(case (length kinds)
+                                 ,@(loop for n in *unrolled-arities*
+                                         collect `(,n (with-unrolled-build
+                                                          (,n kinds data frame args)
+                                                        (funcall (pred-entry pred) m args
+                                                                 cont))))
+                                 (t (general)))))
+                   (flet ((general ()
+                            (let ((build (compile-args-build (cdr goal))))
+                              (declare (type function build))
+                              (lambda (m frame cont barrier)
+                                (declare (ignore barrier))
+                                (funcall (pred-entry pred) m (funcall build frame) cont)))))
+                     (if kinds (by-arity) (general))))))))))
 
 ;;; Running clauses
+;;;
+;;; A predicate's entry selects, from the dereferenced first argument of the call, the list of
+;;; clauses that can match it (all of them when it is unbound; the clauses with a variable or a
+;;; compound first argument for a compound; for an atom the clauses with that key or a variable
+;;; first argument, in their order). Every clause of a selected list is then tried in turn, with
+;;; no further filtering.
 
-(declaim (inline first-arg-of clause-compatible-p))
+(declaim (inline first-arg-of))
 (defun first-arg-of (args)
   "The dereferenced first argument of the run-time argument list ARGS, or +UNBOUND+ when unknown."
   (let ((args (deref args)))
@@ -314,85 +405,167 @@ is a symbol, got ~s." clause)))
           (if (pvar-p a) +unbound+ a))
         +unbound+)))
 
-(defun clause-compatible-p (clause a)
-  (declare (type clause clause))
-  (case (clause-kind clause)
-    (0 t)
-    (1 (or (eq a +unbound+)
-           (and (atom a)
-                (let ((k (clause-key clause)))
-                  (or (eq a k) (and (not (symbolp k)) (equal a k)))))))
-    (t (or (eq a +unbound+) (consp a)))))
-
-(defun next-compatible (clauses a)
-  (loop for tail on clauses
-        when (clause-compatible-p (car tail) a) return tail))
-
 (defvar +empty-frame+ (vector))
+
+(defun grow-scratch (m n)
+  (declare (type machine m) (type fixnum n))
+  (setf (machine-scratch m) (make-array (max n (* 2 (length (machine-scratch m)))))))
+
+(declaim (inline match-head))
+(defun match-head (m clause args)
+  "Match CLAUSE's head with ARGS; the frame holding the head's variables, or NIL on failure. A
+clause with variables is matched in M's scratch frame."
+  (declare (type clause clause) (type machine m))
+  (let ((n (clause-nvars clause)))
+    (declare (type fixnum n))
+    (if (zerop n)
+        (and (funcall (clause-match clause) m +empty-frame+ args) +empty-frame+)
+        (let ((scratch (machine-scratch m)))
+          (when (< (length scratch) n)
+            (setf scratch (grow-scratch m n)))
+          (and (funcall (clause-match clause) m scratch args) scratch)))))
+
+(declaim (inline enter-body))
+(defun enter-body (m clause head-frame cont barrier)
+  "Run the body of CLAUSE (or CONT for a fact) after its head matched into HEAD-FRAME."
+  (declare (type clause clause) (type simple-vector head-frame))
+  (let ((body (clause-body clause))
+        (n (clause-nvars clause)))
+    (declare (type fixnum n))
+    (cond ((null body) (funcall (the function cont)))
+          ((zerop n) (funcall (the function body) m +empty-frame+ cont barrier))
+          ((clause-frameless clause)
+           ;; the single goal builds its arguments from the head frame before anything else
+           ;; uses it, so the scratch frame serves
+           (loop for (i . name) in (clause-init clause)
+                 do (setf (svref head-frame i) (make-pvar name)))
+           (funcall (the function body) m head-frame cont barrier))
+          (t (let ((frame (make-array n)))
+               (dotimes (i (clause-nhead clause))
+                 (setf (svref frame i) (svref head-frame i)))
+               (loop for (i . name) in (clause-init clause)
+                     do (setf (svref frame i) (make-pvar name)))
+               (funcall (the function body) m frame cont barrier))))))
 
 (declaim (inline run-clause))
 (defun run-clause (m clause args cont barrier)
-  (declare (type clause clause))
-  (let* ((n (clause-nvars clause))
-         (frame (if (zerop n) +empty-frame+ (make-array n))))
-    (when (funcall (clause-match clause) m frame args)
-      (loop for (i . name) in (clause-init clause)
-            do (setf (svref frame i) (make-pvar name)))
-      (let ((body (clause-body clause)))
-        (if body
-            (funcall (the function body) m frame cont barrier)
-            (funcall (the function cont)))))))
+  "Match CLAUSE's head with ARGS, then run its body (or CONT for a fact)."
+  (let ((frame (match-head m clause args)))
+    (when frame
+      (enter-body m clause frame cont barrier))))
+
+(defun resume-clauses (m index clauses)
+  "Try CLAUSES in turn under the choice point at INDEX (the newest), which holds the call's
+arguments and continuation: a clause whose head does not match is skipped at once; the choice
+point is dropped before the last clause."
+  (declare (type machine m) (type fixnum index))
+  (let ((args (cp-data m index 1))
+        (cont (cp-data m index 2)))
+    (loop
+      (let ((clause (car clauses))
+            (rest (cdr clauses)))
+        (when (null rest)
+          (setf (machine-cp-top m) index)
+          (return (run-clause m clause args cont index)))
+        (setf (cp-data m index 0) rest)
+        (let ((frame (match-head m clause args)))
+          (when frame
+            (return (enter-body m clause frame cont index)))
+          (undo-trail m (svref (machine-cps m) index))
+          (setf clauses rest))))))
 
 (defun retry-clauses (m index)
-  (let* ((rest (cp-data m index 0))
-         (args (cp-data m index 1))
-         (cont (cp-data m index 2))
-         (next (next-compatible (cdr rest) (first-arg-of args))))
-    (if next
-        (setf (cp-data m index 0) next)
-        (setf (machine-cp-top m) index))
-    (run-clause m (car rest) args cont index)))
+  "Choice point of TRY-CLAUSES: try the clauses left in data slot 0."
+  (resume-clauses m index (cp-data m index 0)))
 
+(declaim (inline try-clauses))
 (defun try-clauses (m clauses args cont)
-  "Run the CLAUSES whose first argument can match ARGS, leaving a choice point for the rest."
-  (let* ((a (first-arg-of args))
-         (tail (next-compatible clauses a)))
-    (when tail
-      (let ((rest (next-compatible (cdr tail) a))
-            (barrier (machine-cp-top m)))
-        (when rest
-          (push-cp m #'retry-clauses rest args cont))
-        (run-clause m (car tail) args cont barrier)))))
+  "Run each of the CLAUSES (a non-empty list) in turn, leaving a choice point for the rest."
+  (if (cdr clauses)
+      (resume-clauses m (push-cp m #'retry-clauses clauses args cont) clauses)
+      (run-clause m (car clauses) args cont (machine-cp-top m))))
 
-(defparameter *index-threshold* 8
-  "Predicates with at least this many clauses get a first-argument index.")
+(declaim (inline eq-key-p))
+(defun eq-key-p (x)
+  "True for the atoms that EQUAL compares like EQ."
+  (typep x '(or symbol fixnum character)))
+
+(declaim (inline eq-key-hash))
+(defun eq-key-hash (x)
+  (declare (type (or symbol fixnum character) x))
+  (typecase x
+    (symbol (sxhash x))
+    (fixnum (logand x most-positive-fixnum))
+    (t (char-code x))))
+
+(defun make-key-lookup (keys buckets default)
+  "A function of a run-time atom returning the bucket of the key EQUAL to it, or DEFAULT. KEYS
+and BUCKETS are parallel lists, the keys distinct under EQUAL."
+  (let ((n (length keys)))
+    (cond ((zerop n) (lambda (a) (declare (ignore a)) default))
+          ((and (every #'eq-key-p keys) (<= n 6))
+           (let ((kv (coerce keys 'simple-vector))
+                 (bv (coerce buckets 'simple-vector)))
+             (lambda (a)
+               (dotimes (i n default)
+                 (when (eq (svref kv i) a) (return (svref bv i)))))))
+          ((every #'eq-key-p keys)
+           ;; open addressing over a power-of-two table at most half full
+           (let* ((size (ash 1 (integer-length (* 2 n))))
+                  (mask (1- size))
+                  (empty (make-symbol "EMPTY"))
+                  (kv (make-array size :initial-element empty))
+                  (bv (make-array size :initial-element default)))
+             (declare (type fixnum mask))
+             (loop for k in keys
+                   for b in buckets
+                   do (let ((i (logand (eq-key-hash k) mask)))
+                        (declare (type fixnum i))
+                        (loop until (eq (svref kv i) empty)
+                              do (setf i (logand (1+ i) mask)))
+                        (setf (svref kv i) k (svref bv i) b)))
+             (lambda (a)
+               (if (eq-key-p a)
+                   (let ((i (logand (the fixnum (eq-key-hash a)) mask)))
+                     (declare (type fixnum i))
+                     (loop
+                       (let ((k (svref kv i)))
+                         (cond ((eq k a) (return (svref bv i)))
+                               ((eq k empty) (return default)))
+                         (setf i (logand (1+ i) mask)))))
+                   default))))
+          (t (let ((table (make-hash-table :test 'equal :size n)))
+               (loop for k in keys
+                     for b in buckets
+                     do (setf (gethash k table) b))
+               (lambda (a) (values (gethash a table default))))))))
 
 (defun make-clauses-entry (clauses)
-  "The entry function running CLAUSES, indexed on the first argument when they are many."
-  (if (< (length clauses) *index-threshold*)
-      (lambda (m args cont) (try-clauses m clauses args cont))
-      (let ((table (make-hash-table
-                    ;; EQUAL and EQL agree on every key but strings, bit vectors and pathnames
-                    :test (if (some (lambda (c) (and (= 1 (clause-kind c))
-                                                     (typep (clause-key c)
-                                                            '(or string bit-vector pathname))))
-                                    clauses)
-                              'equal 'eql)))
-            (var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
-            (cons-clauses (remove 1 clauses :key #'clause-kind)))
-        ;; bucket per atom key: clauses with that key or a variable first argument, in order
-        (let ((vars-so-far '()))
+  "The entry function running CLAUSES, selecting them by the first argument of the call."
+  (let ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
+        (cons-clauses (remove 1 clauses :key #'clause-kind)))
+    (if (every (lambda (c) (= 0 (clause-kind c))) clauses)
+        (lambda (m args cont)
+          (try-clauses m clauses args cont))
+        ;; bucket per atom key: the clauses with that key or a variable first argument
+        (let ((table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
           (dolist (c clauses)
             (case (clause-kind c)
               (0 (push c vars-so-far)
                (maphash (lambda (k bucket) (setf (gethash k table) (cons c bucket))) table))
               (1 (let ((bucket (gethash (clause-key c) table :none)))
+                   (when (eq bucket :none)
+                     (push (clause-key c) keys))
                    (setf (gethash (clause-key c) table)
-                         (cons c (if (eq bucket :none) vars-so-far bucket))))))))
-        (maphash (lambda (k bucket) (setf (gethash k table) (reverse bucket))) table)
-        (lambda (m args cont)
-          (let ((a (first-arg-of args)))
-            (try-clauses m (cond ((eq a +unbound+) clauses)
-                                 ((consp a) cons-clauses)
-                                 (t (gethash a table var-clauses)))
-                         args cont))))))
+                         (cons c (if (eq bucket :none) vars-so-far bucket)))))))
+          (setf keys (nreverse keys))
+          (let ((lookup (make-key-lookup keys (mapcar (lambda (k) (reverse (gethash k table))) keys)
+                                        var-clauses)))
+            (declare (type function lookup))
+            (lambda (m args cont)
+              (let* ((a (first-arg-of args))
+                     (selected (cond ((eq a +unbound+) clauses)
+                                     ((consp a) cons-clauses)
+                                     (t (funcall lookup a)))))
+                (when selected
+                  (try-clauses m selected args cont)))))))))

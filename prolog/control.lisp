@@ -172,9 +172,19 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
   "Goal term → (goal-function nvars . env) for goals without pre-bound variables, so that a
 query written as a constant is compiled once.")
 
+(sb-ext:defglobal **last-compiled-goal** (cons nil nil)
+  "(goal . entry) of the goal COMPILED-GOAL looked up last, so that repeating a query skips the
+table.")
+
 (defun compiled-goal (goal)
   "The goal function, frame and environment of the constant source GOAL, cached by identity."
-  (let ((entry (gethash goal *compiled-goals*)))
+  (let ((entry (let ((last **last-compiled-goal**))
+                 (if (and (eq (car last) goal) goal)
+                     (cdr last)
+                     (let ((entry (gethash goal *compiled-goals*)))
+                       (when entry
+                         (setf **last-compiled-goal** (cons goal entry)))
+                       entry)))))
     (if entry
         (destructuring-bind (fn nvars . env) entry
           (let ((frame (make-array (the fixnum nvars))))

@@ -13,8 +13,19 @@
                                   (svref frame (cdr (assoc sym env :test #'eq)))))))
 
 (defun solution-alist (out frame env)
-  "The binding alist of the output variables OUT in FRAME: values fully substituted, unbound
-variables shown as ?symbols, variables without a value left out."
+  "The binding alist of the output variables in FRAME, OUT listing their entries (?var . index)
+of ENV: values fully substituted, unbound variables shown as ?symbols, variables without a value
+left out."
+  (if (loop for (nil . i) in out
+            always (term-ground-p (svref frame i)))
+      (loop for (sym . i) in out
+            for value = (resolve-term (svref frame i))
+            unless (eq value sym)
+              collect (cons sym value))
+      (named-solution-alist out frame env)))
+
+(defun named-solution-alist (out frame env)
+  "SOLUTION-ALIST when some values hold unbound variables."
   (let ((names '()) (counter 0))
     (flet ((name-of (v)
              (or (cdr (assoc v names :test #'eq))
@@ -23,8 +34,8 @@ variables shown as ?symbols, variables without a value left out."
                                 (make-symbol (format nil "?_G~d" (incf counter))))))
                    (push (cons v sym) names)
                    sym))))
-      (loop for sym in out
-            for value = (resolve-term (svref frame (cdr (assoc sym env :test #'eq))) #'name-of)
+      (loop for (sym . i) in out
+            for value = (resolve-term (svref frame i) #'name-of)
             unless (eq value sym)
               collect (cons sym value)))))
 
@@ -56,19 +67,23 @@ only the first is computed before PROLOG returns."
         (if bindings
             (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
             (compiled-goal goal))
-      (let ((m (make-machine))
-            (out (or out (mapcar #'car env)))
+      (let ((m (acquire-machine))
+            (out (if out
+                     (loop for sym in out collect (assoc sym env :test #'eq))
+                     env))
             (state :fresh))
         ;; initial bindings; no choice point exists yet, so nothing needs trailing
         (dolist (b bindings)
           (unless (unify-terms m (svref frame (cdr (assoc (car b) env)))
                                (convert-binding-value (cdr b) env frame))
             (setf state :done)))
+        (when (eq state :done)
+          (release-machine m))
         (make-lazy-list
          (lambda ()
            (if (eq state :done)
                (values nil nil)
-               (let ((found nil))
+               (let ((found nil) (finished nil))
                  (unwind-protect
                       (with-storage-guard ()
                         (setf found
@@ -79,8 +94,13 @@ only the first is computed before PROLOG returns."
                                              (backtrack m)))
                                   (backtrack m)))
                         (when found
-                          (setf found (list (solution-alist out frame env)))))
-                   (unless found (setf state :done)))
+                          (setf found (list (solution-alist out frame env))))
+                        ;; without a choice point left, no further solution exists
+                        (setf finished (zerop (machine-cp-top m))))
+                   (when (or finished (not found))
+                     (setf state :done)))
+                 (when finished
+                   (release-machine m))
                  (if found
                      (values (car found) t)
                      (values nil nil))))))))))

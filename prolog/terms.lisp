@@ -13,6 +13,7 @@
 (defconstant +unbound+ '+unbound+
   "The value slot of an unbound PVAR.")
 
+(declaim (inline %make-pvar))
 (defstruct (pvar (:constructor %make-pvar ())
                  (:copier nil))
   "A logic variable. VALUE is +UNBOUND+ or the term it is bound to."
@@ -44,17 +45,45 @@
   (trail #() :type simple-vector)
   (trail-top 0 :type fixnum)
   (cps #() :type simple-vector)
-  (cp-top 0 :type fixnum))
+  (cp-top 0 :type fixnum)
+  ;; frame into which clause heads are matched before a clause's own frame is allocated
+  (scratch #() :type simple-vector))
 
 (defun make-machine ()
   "A fresh machine with empty trail and choice-point stack."
-  (%make-machine))
+  (%make-machine :scratch (make-array 8)))
 
 (defun grow-vector (vector)
   (declare (type simple-vector vector))
-  (let ((new (make-array (max 20 (* 2 (length vector))))))
+  (let ((new (make-array (max 24 (* 2 (length vector))))))
     (replace new vector)
     new))
+
+(sb-ext:defglobal **spare-machine** nil
+  "A machine left by a finished query, ready for the next one.")
+
+(defconstant +max-pooled-size+ 256
+  "Machines whose stacks grew beyond this many slots are not kept for reuse.")
+
+(defun acquire-machine ()
+  "An idle machine with empty stacks: the spare one when there is one, else a fresh one."
+  (let ((m **spare-machine**))
+    (if (and m (eq (sb-ext:compare-and-swap (symbol-value '**spare-machine**) m nil) m))
+        m
+        (make-machine))))
+
+(defun release-machine (m)
+  "Offer the machine M of a finished query (no choice point, nothing trailed) for reuse."
+  (declare (type machine m))
+  (when (and (zerop (machine-cp-top m)) (zerop (machine-trail-top m))
+             (<= (length (machine-cps m)) +max-pooled-size+)
+             (<= (length (machine-trail m)) +max-pooled-size+)
+             (<= (length (machine-scratch m)) +max-pooled-size+))
+    ;; drop references to the finished query's terms and continuations
+    (fill (machine-cps m) 0)
+    (fill (machine-scratch m) 0)
+    (setf **spare-machine** m))
+  nil)
 
 (declaim (inline bind-var))
 (defun bind-var (m var value)
@@ -143,6 +172,9 @@
            (unless (and (consp b) (unify-terms m (car a) (car b)))
              (return nil))
            (setf a (cdr a) b (cdr b)))
+          ;; symbols, fixnums and characters are EQUAL only when EQ
+          ((or (typep a '(or symbol fixnum character)) (typep b '(or symbol fixnum character)))
+           (return nil))
           (t (return (equal a b))))))
 
 (defun resolve-term (term &optional map)
@@ -189,6 +221,8 @@ or are replaced through MAP (a function of the variable) when given. Shares unch
 
 (defun copy-term-fresh (term)
   "TERM resolved, with its unbound variables replaced by fresh ones (consistently)."
+  (when (term-ground-p term)
+    (return-from copy-term-fresh (resolve-term term)))
   (let ((map '()))
     (resolve-term term (lambda (v)
                          (or (cdr (assoc v map :test #'eq))

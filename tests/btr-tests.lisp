@@ -245,3 +245,24 @@
     (let ((box (btr:add-object w :box 'wall '((0 0 1) (0 0 0 1)) :size '(1 1 1)
                                :collision-group :static-filter)))
       (is (= 2 (cram-native:object-collision-filter (btr:world-handle w) (btr:object-handle box)))))))
+
+(test copies-finalized-while-the-world-is-used
+  ;; copies dropped without DESTROY-WORLD are destroyed by the garbage collector's finalizer
+  ;; thread while this thread keeps working on the original and on other copies
+  (let* ((w (fresh-world)))
+    (spawn-kitchen w)
+    (btr:add-object w :mesh 'bottle-1 '((-2 -0.9 0.861667d0) (0 0 0 1)) :mass 0.2 :mesh :bottle)
+    (let ((before (cram-native:world-count)))
+      (dotimes (i 60)
+        (let ((copy (btr:copy-world w)))
+          (setf (btr:pose (btr:object copy 'bottle-1)) '((-1.9 -0.9 0.9) (0 0 0 1)))
+          (btr:simulate copy 0.05))
+        (when (zerop (mod i 10)) (sb-ext:gc :full t))
+        (btr:simulate w 0.02)
+        (btr:find-all-contacts w))
+      (sb-ext:gc :full t)
+      (sleep 0.2)
+      (sb-ext:gc :full t)
+      (sleep 0.2)
+      (is (< (cram-native:world-count) (+ before 10)) "dropped copies are destroyed")
+      (is-true (btr:object w 'bottle-1)))))

@@ -94,9 +94,15 @@
 (test pepper-facts-do-not-leak-into-pr2
   (let ((pr2-multiplier (query-values '?m '(rob-int:gripper-meter-to-joint-multiplier :pr2 ?m)))
         (pr2-neck-states (query-values '?n '(rob-int:robot-joint-states :pr2 :neck ?id ?n ?_)))
+        (pr2-neck-joints (mapcar #'first
+                                 (reduce #'append
+                                         (query-values '?s '(rob-int:robot-joint-states
+                                                             :pr2 :neck ?id ?_ ?s)))))
         (pepper-hand (query-values '?l `(rob-int:hand-links ,*pepper* :left ?l))))
     (is (equal '(5.0) pr2-multiplier))
-    (is (null pr2-neck-states))
+    ;; the PR2's own neck state only, on the PR2's neck joints: none of Pepper's
+    (is (equal '(:forward) pr2-neck-states))
+    (is (equal '("head_pan_joint" "head_tilt_joint") pr2-neck-joints))
     (is (null pepper-hand))))
 
 ;;; Costmap metadata with both descriptions loaded

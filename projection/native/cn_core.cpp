@@ -106,6 +106,11 @@ std::string check_str(const char *s, const char *what) {
   return std::string(s);
 }
 
+std::recursive_mutex &api_mutex() {
+  static std::recursive_mutex m;
+  return m;
+}
+
 // ---- world registry: handle = generation << 14 | slot -----------------------------------------
 static const int kSlots = 1 << 14;
 static World *g_worlds[kSlots];
@@ -285,7 +290,13 @@ int cn_resolve_path(const char *uri, const char *base_dir, char *out, int cap) {
   });
 }
 
-int cn_world_alive(int w) { return world_ok(w) ? 1 : 0; }
-int cn_world_count(void) { return g_live; }
+int cn_world_alive(int w) {
+  std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
+  return world_ok(w) ? 1 : 0;
+}
+int cn_world_count(void) {
+  std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
+  return g_live;
+}
 
 }  // extern "C"

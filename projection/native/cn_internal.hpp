@@ -30,7 +30,13 @@ int set_error(int code, const std::string &msg);
 void clear_error();
 int guard_exception();  // call inside catch(...): converts the active exception to a status
 
+// Every entry point runs under one process-wide lock: Lisp may call in from several threads at
+// once (plan threads of one projection, the garbage collector's finalizer destroying a world),
+// and worlds share collision shapes, meshes and the registries.
+std::recursive_mutex &api_mutex();
+
 template <class F> inline int guard(F &&f) {
+  std::lock_guard<std::recursive_mutex> lock(api_mutex());
   try {
     return f();
   } catch (...) {

@@ -136,7 +136,10 @@ void begin_frame(Mode mode) {
   glDisable(GL_BLEND);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
-  glDisable(GL_CULL_FACE);
+  // Closed shapes are seen from outside only: a camera inside its robot's housing (Pepper's
+  // depth camera lies inside the head sphere) looks out through it.
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
   if (mode == SEG) {
     glClearColor(0, 0, 0, 0);
     glDisable(GL_LIGHTING);

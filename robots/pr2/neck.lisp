@@ -24,3 +24,8 @@
   (<- (camera-maximal-height :pr2 1.60))
   (<- (camera-horizontal-angle :pr2 0.995))
   (<- (camera-vertical-angle :pr2 0.75)))
+
+;;; Looking straight ahead: pan and tilt at 0 (inside both joints' limits).
+(def-fact-group pr2-neck-states (robot-joint-states)
+  (<- (robot-joint-states :pr2 :neck ?there-is-only-one-neck :forward
+                          (("head_pan_joint" 0.0d0) ("head_tilt_joint" 0.0d0)))))

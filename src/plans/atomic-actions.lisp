@@ -77,9 +77,20 @@ belief state."
     (unless robot (pp-error "No robot in the belief state (BTR:*CURRENT-BULLET-WORLD*)."))
     (btr:pose robot)))
 
+(defun base-frame-pose-in-map ()
+  "The pose (fixed frame) of the robot's base frame: its link when the robot model has one
+(the base frame need not be the model's root, e.g. Pepper's base_link above the footprint it
+is rooted at), else the robot's pose."
+  (let ((robot (btr:get-robot-object))
+        (frame (robot-base-frame)))
+    (unless robot (pp-error "No robot in the belief state (BTR:*CURRENT-BULLET-WORLD*)."))
+    (if (btr:link-exists-p robot frame)
+        (btr:link-pose robot frame)
+        (btr:pose robot))))
+
 (defun pose-in-map (pose)
   "POSE (a POSE-STAMPED in any frame, or a plain POSE taken to be in the fixed frame) as a
-plain POSE in the fixed frame. Poses in the robot's base frame are placed with the robot's
+plain POSE in the fixed frame. Poses in the robot's base frame are placed with that frame's
 pose in the belief state; other frames go through CRAM-TF:*TRANSFORMER*."
   (cond ((not (typep pose 'cl-transforms:pose))
          (pp-error "Expected a pose or pose-stamped, got ~s." pose))
@@ -90,7 +101,7 @@ pose in the belief state; other frames go through CRAM-TF:*TRANSFORMER*."
                                              (cl-transforms:orientation pose)))
                    ((string= frame (robot-base-frame))
                     (man-int:transform-pose-by
-                     (robot-pose-in-map)
+                     (base-frame-pose-in-map)
                      (cl-transforms:pose->transform
                       (cl-transforms:make-pose (cl-transforms:origin pose)
                                                (cl-transforms:orientation pose)))))

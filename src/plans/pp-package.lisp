@@ -11,6 +11,7 @@
    ;; groundings and helpers
    #:ground-action #:action-types #:pose-in-map #:current-robot-name
    #:object-designator-name #:object-designator-type #:object-pose-in-map
+   #:support-height-below
    #:*look-z-offset* #:pick-place-error))
 
 (in-package :cram-mobile-pick-place-plans)

@@ -22,6 +22,7 @@ the offending value and what was expected."))
       (documentation 'transform-input-error-expected 'function)
       "A description of what a TRANSFORM-INPUT-ERROR expected instead of its value.")
 
+(declaim (ftype (function (t t &optional t) nil) input-error))
 (defun input-error (value expected &optional place)
   "Signal a TRANSFORM-INPUT-ERROR about VALUE, which should have been EXPECTED, found at PLACE."
   (error 'transform-input-error :value value :expected expected :place place))

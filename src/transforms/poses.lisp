@@ -2,7 +2,7 @@
 
 (in-package :cl-transforms)
 
-(declaim (inline %make-pose %make-transform))
+(declaim (inline %make-pose %make-transform %make-raw-transform))
 
 (defstruct (pose (:constructor %make-pose (origin orientation))
                  (:conc-name nil)
@@ -14,16 +14,57 @@
 (setf (documentation 'origin 'function) "The position (a 3D-VECTOR) of a POSE."
       (documentation 'orientation 'function) "The orientation (a QUATERNION) of a POSE.")
 
-(defstruct (transform (:constructor %make-transform (translation rotation))
-                      (:conc-name nil)
+(defstruct (transform (:constructor %make-raw-transform (tx ty tz qx qy qz qw))
+                      (:constructor %make-transform
+                          (translation rotation
+                           &aux (tx (%v-x translation)) (ty (%v-y translation))
+                                (tz (%v-z translation)) (qx (%q-x rotation))
+                                (qy (%q-y rotation)) (qz (%q-z rotation)) (qw (%q-w rotation))))
+                      (:conc-name %tr-)
                       (:copier nil))
   "A rigid transform: first ROTATION (a unit QUATERNION), then TRANSLATION (a 3D-VECTOR).
-Applied to a point p it gives rotation(p) + translation; immutable."
-  (translation +zero-vector+ :type 3d-vector :read-only t)
-  (rotation +identity-quaternion+ :type quaternion :read-only t))
+Applied to a point p it gives rotation(p) + translation; immutable. The components are stored
+inline, so that composing transforms allocates one object."
+  (tx 0d0 :type double-float :read-only t)
+  (ty 0d0 :type double-float :read-only t)
+  (tz 0d0 :type double-float :read-only t)
+  (qx 0d0 :type double-float :read-only t)
+  (qy 0d0 :type double-float :read-only t)
+  (qz 0d0 :type double-float :read-only t)
+  (qw 1d0 :type double-float :read-only t))
 
-(setf (documentation 'translation 'function) "The translation (a 3D-VECTOR) of a TRANSFORM."
-      (documentation 'rotation 'function) "The rotation (a QUATERNION) of a TRANSFORM.")
+(defmacro with-transform-components (((tx ty tz qx qy qz qw) transform) &body body)
+  "Bind TX TY TZ to the translation and QX QY QZ QW to the rotation of the TRANSFORM around BODY."
+  (let ((g (gensym "TR")))
+    `(let* ((,g ,transform)
+            (,tx (%tr-tx ,g)) (,ty (%tr-ty ,g)) (,tz (%tr-tz ,g))
+            (,qx (%tr-qx ,g)) (,qy (%tr-qy ,g)) (,qz (%tr-qz ,g)) (,qw (%tr-qw ,g)))
+       (declare (type double-float ,tx ,ty ,tz ,qx ,qy ,qz ,qw)
+                (ignorable ,tx ,ty ,tz ,qx ,qy ,qz ,qw))
+       ,@body)))
+
+(declaim (inline translation rotation))
+(defun translation (transform)
+  "The translation (a 3D-VECTOR) of a TRANSFORM."
+  (unless (transform-p transform) (input-error transform "a TRANSFORM" 'translation))
+  (%make-3d-vector (%tr-tx transform) (%tr-ty transform) (%tr-tz transform)))
+
+(defun rotation (transform)
+  "The rotation (a QUATERNION) of a TRANSFORM."
+  (unless (transform-p transform) (input-error transform "a TRANSFORM" 'rotation))
+  (%make-quaternion (%tr-qx transform) (%tr-qy transform) (%tr-qz transform)
+                    (%tr-qw transform)))
+
+(declaim (inline %unit-transform))
+(defun %unit-transform (tx ty tz qx qy qz qw)
+  "A TRANSFORM from the double floats TX TY TZ and QX QY QZ QW, the quaternion scaled to unit norm
+(kept as it is when its norm is 1 to within rounding)."
+  (declare (type double-float tx ty tz qx qy qz qw) (optimize (speed 3) (safety 0) (debug 0)))
+  (if (%unit-norm-p qx qy qz qw)
+      (%make-raw-transform tx ty tz qx qy qz qw)
+      (let ((s (%unit-scale qx qy qz qw nil)))
+        (declare (type double-float s))
+        (%make-raw-transform tx ty tz (* qx s) (* qy s) (* qz s) (* qw s)))))
 
 (setf (documentation 'pose-p 'function) "True when the object is a POSE (stamped or not)."
       (documentation 'transform-p 'function)
@@ -72,7 +113,7 @@ Applied to a point p it gives rotation(p) + translation; immutable."
 
 (defun make-identity-transform ()
   "The identity TRANSFORM."
-  (%make-transform +zero-vector+ +identity-quaternion+))
+  (%make-raw-transform 0d0 0d0 0d0 0d0 0d0 0d0 1d0))
 
 (defun copy-pose (pose &key origin orientation)
   "A POSE like POSE with ORIGIN and/or ORIENTATION replaced."
@@ -104,23 +145,26 @@ Applied to a point p it gives rotation(p) + translation; immutable."
 (declaim (inline %transform*2 %transform-inv))
 (defun %transform*2 (a b)
   "The composition A B of two TRANSFORMs (unchecked): first B, then A."
-  (let ((ta (translation a)) (qa (rotation a)) (tb (translation b)) (qb (rotation b)))
-    (with-quaternion-components ((ax ay az aw) qa)
-      (with-quaternion-components ((bx by bz bw) qb)
-        (with-vector-components ((vx vy vz) tb)
-          (multiple-value-bind (rx ry rz) (%rotate-components ax ay az aw vx vy vz)
-            (%make-transform
-             (%make-3d-vector (+ rx (%v-x ta)) (+ ry (%v-y ta)) (+ rz (%v-z ta)))
-             (multiple-value-bind (x y z w) (%q*-components ax ay az aw bx by bz bw)
-               (%unit-quaternion x y z w)))))))))
+  (declare (type transform a b) (optimize (speed 3) (safety 0) (debug 0)))
+  (with-transform-components ((atx aty atz ax ay az aw) a)
+    (with-transform-components ((btx bty btz bx by bz bw) b)
+      (multiple-value-bind (rx ry rz) (%rotate-components ax ay az aw btx bty btz)
+        (multiple-value-bind (x y z w) (%q*-components ax ay az aw bx by bz bw)
+          (%unit-transform (+ rx atx) (+ ry aty) (+ rz atz) x y z w))))))
 
 (defun %transform-inv (tr)
   "The inverse of the TRANSFORM TR (unchecked)."
-  (with-quaternion-components ((x y z w) (rotation tr))
-    (with-vector-components ((vx vy vz) (translation tr))
-      (multiple-value-bind (rx ry rz) (%rotate-components (- x) (- y) (- z) w vx vy vz)
-        (%make-transform (%make-3d-vector (- rx) (- ry) (- rz))
-                         (%make-quaternion (- x) (- y) (- z) w))))))
+  (declare (type transform tr) (optimize (speed 3) (safety 0) (debug 0)))
+  (with-transform-components ((vx vy vz x y z w) tr)
+    ;; the translation is -(v rotated by the conjugate): with t = 2 (u x v), u = (x y z), that is
+    ;; (w t - v) - u x t, which rounds exactly like rotating by (-x -y -z w) and negating
+    (let* ((tx (* 2d0 (- (* y vz) (* z vy))))
+           (ty (* 2d0 (- (* z vx) (* x vz))))
+           (tz (* 2d0 (- (* x vy) (* y vx)))))
+      (%make-raw-transform (- (- (* w tx) vx) (- (* y tz) (* z ty)))
+                           (- (- (* w ty) vy) (- (* z tx) (* x tz)))
+                           (- (- (* w tz) vz) (- (* x ty) (* y tx)))
+                           (- x) (- y) (- z) w))))
 
 (defun transform* (transform &rest more)
   "The composition of the TRANSFORMs from left to right: (transform* a b) applies B first, then
@@ -157,29 +201,36 @@ A, so (transform* map->base base->hand) is map->hand."
   "The 3D-VECTOR POINT mapped by TRANSFORM: rotation(point) + translation."
   (unless (transform-p transform) (input-error transform "a TRANSFORM" 'transform-point))
   (unless (3d-vector-p point) (input-error point "a 3D-VECTOR" 'transform-point))
-  (let ((tr (translation transform)))
-    (with-quaternion-components ((qx qy qz qw) (rotation transform))
+  (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
+    (with-transform-components ((tx ty tz qx qy qz qw) transform)
       (with-vector-components ((vx vy vz) point)
         (multiple-value-bind (rx ry rz) (%rotate-components qx qy qz qw vx vy vz)
-          (%make-3d-vector (+ rx (%v-x tr)) (+ ry (%v-y tr)) (+ rz (%v-z tr))))))))
+          (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz)))))))
 
 (defun transform-pose (transform pose)
   "The POSE that results from moving POSE by TRANSFORM (POSE expressed in TRANSFORM's parent
 frame when TRANSFORM is the child frame's transform)."
   (unless (transform-p transform) (input-error transform "a TRANSFORM" 'transform-pose))
   (unless (pose-p pose) (input-error pose "a POSE" 'transform-pose))
-  (transform->pose (%transform*2 transform (pose->transform pose))))
+  (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
+    (with-transform-components ((tx ty tz ax ay az aw) transform)
+      (with-vector-components ((vx vy vz) (origin pose))
+        (with-quaternion-components ((bx by bz bw) (orientation pose))
+          (multiple-value-bind (rx ry rz) (%rotate-components ax ay az aw vx vy vz)
+            (%make-pose (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz))
+                        (multiple-value-bind (x y z w)
+                            (%q*-components ax ay az aw bx by bz bw)
+                          (%unit-quaternion x y z w)))))))))
 
 ;;; Matrices
 
 (defun transform->matrix (transform)
   "The homogeneous 4x4 matrix (a double-float array) of TRANSFORM."
   (check-type-of transform 'transform "a TRANSFORM" 'transform->matrix)
-  (let ((m (make-array '(4 4) :element-type 'double-float :initial-element 0d0))
-        (tr (translation transform)))
+  (let ((m (make-array '(4 4) :element-type 'double-float :initial-element 0d0)))
     (%fill-rotation-matrix (rotation transform) m)
-    (setf (aref m 0 3) (%v-x tr) (aref m 1 3) (%v-y tr) (aref m 2 3) (%v-z tr)
-          (aref m 3 3) 1d0)
+    (setf (aref m 0 3) (%tr-tx transform) (aref m 1 3) (%tr-ty transform)
+          (aref m 2 3) (%tr-tz transform) (aref m 3 3) 1d0)
     m))
 
 (defun pose->matrix (pose)

@@ -27,7 +27,19 @@ A non-string signals CL-TRANSFORMS:TRANSFORM-INPUT-ERROR naming it."
 
 (defstruct (transform-stamped (:include transform)
                               (:constructor %make-transform-stamped
-                                  (frame-id child-frame-id stamp translation rotation))
+                                  (frame-id child-frame-id stamp translation rotation
+                                   &aux (cl-transforms::tx (cl-transforms::%v-x translation))
+                                        (cl-transforms::ty (cl-transforms::%v-y translation))
+                                        (cl-transforms::tz (cl-transforms::%v-z translation))
+                                        (cl-transforms::qx (cl-transforms::%q-x rotation))
+                                        (cl-transforms::qy (cl-transforms::%q-y rotation))
+                                        (cl-transforms::qz (cl-transforms::%q-z rotation))
+                                        (cl-transforms::qw (cl-transforms::%q-w rotation))))
+                              (:constructor %make-raw-transform-stamped
+                                  (frame-id child-frame-id stamp
+                                   cl-transforms::tx cl-transforms::ty cl-transforms::tz
+                                   cl-transforms::qx cl-transforms::qy cl-transforms::qz
+                                   cl-transforms::qw))
                               (:conc-name %ts-)
                               (:copier nil))
   "A TRANSFORM from the frame FRAME-ID to the frame CHILD-FRAME-ID at time STAMP: the pose of

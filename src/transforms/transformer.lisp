@@ -144,13 +144,12 @@ non-static links used (0 when there are none); NIL when the frames lie in differ
                                                      gx gy gz gqx gqy gqz gqw))
     (macrolet ((climb (frame x y z qx qy qz qw)
                  ;; (x y z q) := link(frame) * (x y z q); frame := parent(frame)
-                 `(let* ((tr (tf-frame-transform ,frame))
-                         (lt (translation tr)) (lq (rotation tr)))
-                    (cl-transforms::with-quaternion-components ((lqx lqy lqz lqw) lq)
+                 `(let ((tr (tf-frame-transform ,frame)))
+                    (cl-transforms::with-transform-components
+                        ((ltx lty ltz lqx lqy lqz lqw) tr)
                       (multiple-value-bind (rx ry rz)
                           (cl-transforms::%rotate-components lqx lqy lqz lqw ,x ,y ,z)
-                        (setf ,x (+ rx (cl-transforms::%v-x lt)) ,y (+ ry (cl-transforms::%v-y lt))
-                              ,z (+ rz (cl-transforms::%v-z lt))))
+                        (setf ,x (+ rx ltx) ,y (+ ry lty) ,z (+ rz ltz)))
                       (multiple-value-setq (,qx ,qy ,qz ,qw)
                         (cl-transforms::%q*-components lqx lqy lqz lqw ,qx ,qy ,qz ,qw)))
                     (unless (tf-frame-static ,frame)
@@ -169,9 +168,7 @@ non-static links used (0 when there are none); NIL when the frames lie in differ
                                              (- sx gx) (- sy gy) (- sz gz))
         (multiple-value-bind (qx qy qz qw)
             (cl-transforms::%q*-components (- gqx) (- gqy) (- gqz) gqw sqx sqy sqz sqw)
-          (values (cl-transforms::%make-transform
-                   (cl-transforms::%make-3d-vector rx ry rz)
-                   (cl-transforms::%unit-quaternion qx qy qz qw))
+          (values (cl-transforms::%unit-transform rx ry rz qx qy qz qw)
                   (if (= stamp most-positive-double-float) 0d0 stamp)))))))
 
 (defun %try-lookup (transformer target source)
@@ -233,8 +230,9 @@ both frames."
   (let ((time (and time (cl-transforms::ensure-double time "LOOKUP-TRANSFORM :time"))))
     (multiple-value-bind (tr stamp target source)
         (%lookup transformer target-frame source-frame timeout 'lookup-transform)
-      (%make-transform-stamped target source (if (and time (plusp time)) time stamp)
-                               (translation tr) (rotation tr)))))
+      (cl-transforms::with-transform-components ((tx ty tz qx qy qz qw) tr)
+        (%make-raw-transform-stamped target source (if (and time (plusp time)) time stamp)
+                                     tx ty tz qx qy qz qw)))))
 
 (defun can-transform (transformer target-frame source-frame &key time timeout)
   "True when LOOKUP-TRANSFORM with the same frames would succeed (waiting up to TIMEOUT)."
@@ -259,8 +257,8 @@ transforms are always used."
   (multiple-value-bind (tr stamp target)
       (%lookup transformer target-frame (%ps-frame-id pose) timeout 'transform-pose-stamped)
     (declare (ignore stamp))
-    (let ((result (cl-transforms::%transform*2 tr (pose->transform pose))))
-      (%make-pose-stamped target (%ps-stamp pose) (translation result) (rotation result)))))
+    (let ((result (transform-pose tr pose)))
+      (%make-pose-stamped target (%ps-stamp pose) (origin result) (orientation result)))))
 
 (defun transform-point-stamped (transformer &key target-frame point timeout use-current-ros-time)
   "POINT (a POINT-STAMPED) expressed in TARGET-FRAME, as a POINT-STAMPED with the stamp of POINT.

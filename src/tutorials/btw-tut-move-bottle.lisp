@@ -7,8 +7,15 @@
   "A bottle pose on the table in front of *BASE-POSE-NEAR-TABLE*: seen at the first look.")
 (defparameter *bottle-pose-out-of-view* '((-2.0 -0.9 0.86) (0 0 0 1))
   "A bottle pose right of the robot: only a new look direction finds it.")
-(defparameter *bottle-pose-hard-to-grasp* '((-1.1 -0.9 0.86) (0 0 0 1))
-  "A bottle pose left of the robot: the first arm and grasp tried cannot take it.")
+(defparameter *bottle-pose-hard-to-grasp* '((-1.85 -0.92 0.86) (0 0 1 0))
+  "A bottle pose right of the robot (0.4 m to the right of *BASE-POSE-NEAR-TABLE*, 0.77 m
+ahead), turned half round about its axis. Grasps are defined in the bottle's frame, so its
+left side now faces away from the robot: the first choice, the LEFT-SIDE grasp with the right
+arm, would bring the gripper back towards the robot from behind the bottle. No sample of base
+offset, torso height and arm configuration reaches those poses free of collision, reaching and
+grasping fail, gripping closes on nothing (GRIPPER-CLOSED-COMPLETELY) and the RIGHT-SIDE grasp,
+from the side facing the robot, takes the bottle. The samples follow a seeded random state, so
+the same recovery happens every run.")
 
 (defparameter *final-object-destination*
   (cl-transforms-stamped:make-pose-stamped
@@ -89,7 +96,9 @@ Returns the perceived designator and the arm preferred for that direction."
 
 (defun pick-up-object (?perceived-object ?grasping-arm)
   "Pick up ?PERCEIVED-OBJECT with ?GRASPING-ARM, trying the grasps in turn and then the other
-arm. Returns the arm holding the object."
+arm. A grasp is given up on a manipulation or gripper failure (an unreachable pose, a gripper
+closing on nothing) or when the action designator cannot be resolved; an arm when none of its
+grasps worked (OBJECT-UNREACHABLE). Returns the arm holding the object."
   (let ((?possible-arms '(:right :left)))
     (cpl:with-retry-counters ((arm-change-retry 1))
       (cpl:with-failure-handling
@@ -104,8 +113,9 @@ arm. Returns the arm holding the object."
                (?grasp (cut:lazy-car ?possible-grasps)))
           (cpl:with-retry-counters ((grasp-retries 3))
             (cpl:with-failure-handling
-                (((or common-fail:manipulation-pose-unreachable
-                      common-fail:gripper-closed-completely) (e)
+                (((or common-fail:manipulation-low-level-failure
+                      common-fail:gripper-low-level-failure
+                      desig:designator-error) (e)
                    (cpl:log-message :warn '(grasp-failure)
                                     "~a~%Failed to grasp from ~a using ~a arm" e ?grasp
                                     ?grasping-arm)

@@ -25,21 +25,11 @@
 (defvar *robot-urdf* nil "The parsed robot URDF, read once.")
 (defvar *kitchen-urdf* nil "The parsed kitchen URDF, read once.")
 
-(defun project-directory ()
-  (asdf:system-source-directory "cram-bullet-world-tutorial"))
-
-(defun ros-parameter-string (name)
-  "The value of the ROS parameter NAME when a ROS node is running and it is set, else NIL."
-  (let* ((package (find-package :roslisp-utilities))
-         (running (and package (find-symbol "ROS-RUNNING-P" package)))
-         (reader (and package (find-symbol "ROBOT-DESCRIPTION-STRING" package))))
-    (when (and running reader (fboundp running) (fboundp reader) (funcall running))
-      (ignore-errors (funcall reader name)))))
-
-(defun read-urdf (parameter relative-path)
-  (cl-urdf:parse-urdf
-   (or (ros-parameter-string parameter)
-       (uiop:read-file-string (merge-pathnames relative-path (project-directory))))))
+(defun read-urdf (parameter fallback-file)
+  "The parsed URDF from the ROS parameter PARAMETER while a node runs and it is set, else from
+FALLBACK-FILE (relative to the repository root)."
+  (cl-urdf:parse-urdf (roslisp-utilities:robot-description-string
+                       :parameter parameter :fallback-file fallback-file)))
 
 (defun get-robot-urdf ()
   "The PR2 URDF: from the parameter *ROBOT-PARAMETER* under ROS, else robots/pr2/pr2.urdf."
@@ -110,12 +100,4 @@ node runs, else from the project's files."
    (or (btr:object btr:*current-bullet-world* kitchen-name)
        (error "MOVE-KITCHEN-JOINT: there is no kitchen object ~s in the world." kitchen-name))))
 
-(let* ((package (find-package :roslisp-utilities))
-       (register (and package (find-symbol "REGISTER-ROS-INIT-FUNCTION" package))))
-  (when (and register (macro-function register))
-    (eval `(,register init-projection))))
-
-;;; The neck's forward configuration the tutorial looks back to before turning the head.
-(def-fact-group btw-tut-neck-states (rob-int:robot-joint-states)
-  (<- (rob-int:robot-joint-states :pr2 :neck ?_ :forward (("head_pan_joint" 0.0d0)
-                                                          ("head_tilt_joint" 0.0d0)))))
+(roslisp-utilities:register-ros-init-function init-projection)

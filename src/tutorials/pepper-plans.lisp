@@ -46,12 +46,34 @@
     (:my-bar2 ((1.8 -1.4 0.77) (0 0 1 1)) (0.5 0 0.1) :denkmit))
   "The products of SPAWN-PRODUCTS-ONE: (name pose colour mesh).")
 
+(defun stand-on-support (name)
+  "Raise the item NAME so that its bottom rests on the top of the shelf level (or item) below
+its origin when it would otherwise stick into it. Returns the metres it was raised."
+  (let* ((object (btr:object btr:*current-bullet-world* name))
+         (pose (btr:pose object))
+         (origin (cl-transforms:origin pose))
+         (bottom (cl-transforms:z (btr:aabb object)))
+         (support (pp-plans:support-height-below (cl-transforms:x origin) (cl-transforms:y origin)
+                                                 (cl-transforms:z origin) :ignore (list name)))
+         (lift (if (and support (< bottom support)) (- support bottom) 0d0)))
+    (when (plusp lift)
+      (setf (btr:pose object)
+            (cl-transforms:make-pose (cl-transforms:v+ origin (cl-transforms:make-3d-vector 0 0 lift))
+                                     (cl-transforms:orientation pose))))
+    lift))
+
 (defun spawn-products-one ()
-  "Put the products on the shelves (static, mass 0) and the human into the shop."
+  "Put the products on the shelves (static, mass 0) and the human into the shop.
+The poses of *PRODUCTS* were written for the demo's own product meshes; the household meshes
+(the cereal box's origin lies 0.1019 m above its bottom, the milk carton's 0.0877 m) would
+stick up to 2.4 cm into the shelf boards there, which hides more than a tenth of a box from
+the camera. Each product therefore keeps its x, y and orientation and stands on the board
+below it."
   (loop for (name pose color mesh) in *products*
         do (prolog `(and (btr:bullet-world ?world)
                          (assert (btr:object ?world :mesh ,name ,pose
-                                             :mass 0 :color ,color :mesh ,mesh)))))
+                                             :mass 0 :color ,color :mesh ,mesh))))
+           (stand-on-support name))
   (spawn-human))
 
 (defun spawn-human ()

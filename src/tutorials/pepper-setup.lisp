@@ -20,18 +20,32 @@
 (defparameter *robot-parameter* "robot_description" "The ROS parameter with Pepper's URDF.")
 (defparameter *kitchen-parameter* "shelf_description" "The ROS parameter with the shop's URDF.")
 
-(defun read-description (parameter relative-path)
-  (cl-urdf:parse-urdf
-   (or (btw-tut::ros-parameter-string parameter)
-       (uiop:read-file-string
-        (merge-pathnames relative-path
-                         (asdf:system-source-directory "cram-pepper-demo"))))))
+(defun read-description (parameter fallback-file)
+  "The parsed URDF from the ROS parameter PARAMETER while a node runs and it is set, else from
+FALLBACK-FILE (relative to the repository root)."
+  (cl-urdf:parse-urdf (roslisp-utilities:robot-description-string
+                       :parameter parameter :fallback-file fallback-file)))
+
+(defparameter *pepper-root-link* "base_footprint"
+  "The link Pepper's URDF is re-rooted at for the belief state: the footprint on the floor
+(the URDF's own root, base_link, is the torso 0.82 m up), so that a robot pose with z 0
+stands Pepper on the floor with its camera at eye height.")
+
+(defun root-at (urdf link-name)
+  "Make LINK-NAME the root link of the parsed URDF (BTR:ADD-OBJECT re-roots such a model)."
+  (setf (slot-value urdf 'cl-urdf:root-link)
+        (or (gethash link-name (cl-urdf:links urdf))
+            (error "SETUP-BULLET-WORLD: the robot URDF ~s has no link ~s to root it at."
+                   (cl-urdf:name urdf) link-name)))
+  urdf)
 
 (defun setup-bullet-world ()
-  "A fresh belief state with the floor, the shop's shelves (named :KITCHEN) and Pepper."
-  (let* ((robot (or *pepper-urdf*
-                    (setf *pepper-urdf* (read-description *robot-parameter*
-                                                          "robots/pepper/pepper.urdf"))))
+  "A fresh belief state with the floor, the shop's shelves (named :KITCHEN) and Pepper, its
+URDF re-rooted at *PEPPER-ROOT-LINK* so that it stands on the floor."
+  (let* ((robot (root-at (or *pepper-urdf*
+                             (setf *pepper-urdf* (read-description *robot-parameter*
+                                                                   "robots/pepper/pepper.urdf")))
+                         *pepper-root-link*))
          (kitchen (or *kitchen-urdf*
                       (setf *kitchen-urdf* (read-description *kitchen-parameter*
                                                              "resources/dm_shelves.urdf"))))
@@ -49,7 +63,9 @@
       (btr:add-object world :urdf :kitchen '((0 0 0) (0 0 0 1)) :urdf kitchen
                       :collision-group :static-filter
                       :collision-mask '(:default-filter :character-filter) :compound t)
-      (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)
+      (let ((pepper (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
+        ;; the kinematic model the projection plans with is the re-rooted one
+        (setf rob-int:*robot-urdf* (btr:urdf pepper)))
       (btr:debug-window world))
     btr:*current-bullet-world*))
 
@@ -62,7 +78,4 @@
   (btr:add-objects-to-mesh-list "cram_plans_resources" :directory "meshes")
   btr:*current-bullet-world*)
 
-(let* ((package (find-package :roslisp-utilities))
-       (register (and package (find-symbol "REGISTER-ROS-INIT-FUNCTION" package))))
-  (when (and register (macro-function register))
-    (eval `(,register init-projection))))
+(roslisp-utilities:register-ros-init-function init-projection)
