@@ -52,7 +52,7 @@ native: .setup-done
 
 lisp: native
 	$(SBCL) --eval '(asdf:load-system "cram-plans")' \
-	        --eval '(asdf:load-system "cram-plans-tests")'
+	        --eval '(asdf:load-system "cram-plans/tests")'
 
 build: lisp
 

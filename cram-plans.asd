@@ -1,7 +1,12 @@
 ;;;; cram-plans: one system per layer; `cram-plans' loads them all.
 ;;;; Each layer's files are listed in its own DEFSYSTEM form below.
 
-(defsystem "cram-utilities"
+;; Debian's cxml.asd defines several primary systems in one file, which makes ASDF warn
+;; on every load; load it once here with those warnings muffled.
+(handler-bind ((warning #'muffle-warning))
+  (asdf:load-system "cxml"))
+
+(defsystem "cram-plans/cram-utilities"
   :description "Lazy lists, variable bindings and small utilities (package CUT)."
   :depends-on ("alexandria")
   :pathname "prolog/"
@@ -10,9 +15,9 @@
                (:file "lazy")
                (:file "bindings")))
 
-(defsystem "cram-prolog"
+(defsystem "cram-plans/cram-prolog"
   :description "The CRAM-dialect Prolog engine, compiled to Lisp closures (package PROLOG)."
-  :depends-on ("cram-utilities" "alexandria")
+  :depends-on ("cram-plans/cram-utilities" "alexandria")
   :pathname "prolog/"
   :serial t
   :components ((:file "prolog-package")
@@ -26,7 +31,7 @@
                (:file "query")
                (:file "documentation")))
 
-(defsystem "cl-transforms"
+(defsystem "cram-plans/cl-transforms"
   :description "3D vectors, quaternions, poses, transforms, stamped poses, a TF buffer (CL-TRANSFORMS, CL-TRANSFORMS-STAMPED, CL-TF, CRAM-TF)."
   :depends-on ("alexandria" "bordeaux-threads")
   :pathname "src/transforms/"
@@ -40,7 +45,7 @@
                (:file "transformer")
                (:file "cram-tf")))
 
-(defsystem "cram-native"
+(defsystem "cram-plans/cram-native"
   :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, FCL, OSMesa, libpng)."
   :depends-on ("cffi" "alexandria")
   :pathname "projection/"
@@ -52,7 +57,7 @@
                (:file "native-render")
                (:file "native-ik")))
 
-(defsystem "cram-language"
+(defsystem "cram-plans/cram-language"
   :description "The CRAM plan language (CPL): tasks, PAR/PURSUE/TRY-*, failures, fluents, the task tree, logging."
   :depends-on ("alexandria" "bordeaux-threads" "yason")
   :pathname "src/language/"
@@ -68,17 +73,17 @@
                (:file "fluents")
                (:file "task-tree-output")))
 
-(defsystem "cram-common-failures"
+(defsystem "cram-plans/cram-common-failures"
   :description "The failure classes robot plans signal (COMMON-FAIL) and the retry-with-solutions strategies."
-  :depends-on ("cram-language" "cram-utilities")
+  :depends-on ("cram-plans/cram-language" "cram-plans/cram-utilities")
   :pathname "src/language/"
   :serial t
   :components ((:file "common-failures")
                (:file "failure-strategies")))
 
-(defsystem "cram-designators"
+(defsystem "cram-plans/cram-designators"
   :description "Designators: action, motion, location, object and human descriptions grounded through Prolog (package DESIG)."
-  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms")
+  :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms")
   :pathname "designators/"
   :serial t
   :components ((:file "desig-package")
@@ -88,19 +93,19 @@
                (:file "desig-location")
                (:file "desig-facts")))
 
-(defsystem "cram-robot-interfaces"
+(defsystem "cram-plans/cram-robot-interfaces"
   :description "Interface predicates of robot descriptions and the current robot (package ROB-INT)."
-  :depends-on ("cram-prolog" "cram-utilities")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities")
   :pathname "designators/"
   :serial t
   :components ((:file "robot-interfaces-package")
                (:file "robot-interfaces")
                (:file "robot-interfaces-facts")))
 
-(defsystem "cram-location-costmap"
+(defsystem "cram-plans/cram-location-costmap"
   :description "Location costmaps and their metadata predicates (package COSTMAP)."
-  :depends-on ("cram-prolog" "cram-utilities" "cram-robot-interfaces" "cram-designators"
-               "cl-transforms" "cram-native" "cram-bullet-reasoning")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-robot-interfaces" "cram-plans/cram-designators"
+               "cram-plans/cl-transforms" "cram-plans/cram-native" "cram-plans/cram-bullet-reasoning")
   :pathname "designators/"
   :serial t
   :components ((:file "costmap-package")
@@ -112,28 +117,28 @@
                (:file "costmap-designators")
                (:file "costmap-heatmap")))
 
-(defsystem "cram-pr2-description"
+(defsystem "cram-plans/cram-pr2-description"
   :description "The PR2 as robot-description facts keyed by :PR2 (package PR2-DESCR)."
-  :depends-on ("cram-prolog" "cram-robot-interfaces" "cram-location-costmap" "cl-transforms")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap" "cram-plans/cl-transforms")
   :pathname "robots/pr2/"
   :components ((:file "package")
                (:file "general-knowledge" :depends-on ("package"))
                (:file "arms" :depends-on ("package"))
                (:file "neck" :depends-on ("package"))))
 
-(defsystem "cram-pepper-description"
+(defsystem "cram-plans/cram-pepper-description"
   :description "The Pepper robot as robot-description facts keyed by PEPPER-DESCR:PEPPER."
-  :depends-on ("cram-prolog" "cram-robot-interfaces" "cram-location-costmap" "cl-transforms")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap" "cram-plans/cl-transforms")
   :pathname "robots/pepper/"
   :components ((:file "package")
                (:file "general-knowledge" :depends-on ("package"))
                (:file "arms" :depends-on ("package"))
                (:file "neck" :depends-on ("package"))))
 
-(defsystem "cram-executive"
+(defsystem "cram-plans/cram-executive"
   :description "PERFORM, process modules, events and occasions, projection environments (EXE, CPM, COE, CPOE, PROJ)."
-  :depends-on ("cram-utilities" "cram-prolog" "cram-designators" "cram-language"
-               "cram-common-failures")
+  :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cram-designators" "cram-plans/cram-language"
+               "cram-plans/cram-common-failures")
   :pathname "src/executive/"
   :serial t
   :components ((:file "executive-package")
@@ -143,11 +148,11 @@
                (:file "projection")
                (:file "perform")))
 
-(defsystem "cram-bullet-reasoning"
+(defsystem "cram-plans/cram-bullet-reasoning"
   :description "The Bullet belief state: URDF models (CL-URDF), worlds and objects, Prolog
 predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)."
-  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms" "cram-native"
-               "cram-robot-interfaces" "cxml" "trivial-garbage" "bordeaux-threads")
+  :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms" "cram-plans/cram-native"
+               "cram-plans/cram-robot-interfaces" "cxml" "trivial-garbage" "bordeaux-threads")
   :pathname "projection/btr/"
   :serial t
   :components ((:file "package")
@@ -161,21 +166,21 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                (:file "facts")
                (:file "utils")))
 
-(defsystem "cram-common-designators"
+(defsystem "cram-plans/cram-common-designators"
   :description "MOTION-GROUNDING rules of the robot-independent motions and WAIT-PM (COMMON-DESIG)."
-  :depends-on ("cram-prolog" "cram-utilities" "cram-designators" "cram-executive"
-               "cram-language" "cl-transforms")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-designators" "cram-plans/cram-executive"
+               "cram-plans/cram-language" "cram-plans/cl-transforms")
   :pathname "projection/urdf-proj/"
   :serial t
   :components ((:file "motions-package")
                (:file "motions")))
 
-(defsystem "cram-urdf-projection"
+(defsystem "cram-plans/cram-urdf-projection"
   :description "The simulated robot: motions teleport the robot of the Bullet belief state, with
 IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
-  :depends-on ("cram-bullet-reasoning" "cram-native" "cram-common-designators" "cram-executive"
-               "cram-language" "cram-common-failures" "cram-robot-interfaces" "cram-designators"
-               "cl-transforms" "cram-prolog" "cram-utilities")
+  :depends-on ("cram-plans/cram-bullet-reasoning" "cram-plans/cram-native" "cram-plans/cram-common-designators" "cram-plans/cram-executive"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-robot-interfaces" "cram-plans/cram-designators"
+               "cram-plans/cl-transforms" "cram-plans/cram-prolog" "cram-plans/cram-utilities")
   :pathname "projection/urdf-proj/"
   :serial t
   :components ((:file "package")
@@ -192,20 +197,20 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
 (defsystem "cram-plans"
   :description "CRAM plans with a Bullet belief state for projection: all layers."
   :version "0.1.0"
-  :depends-on ("cram-utilities" "cram-prolog" "cl-transforms" "cram-native"
-               "cram-language" "cram-common-failures"
-               "cram-robot-interfaces" "cram-location-costmap"
-               "cram-pr2-description" "cram-pepper-description"
-               "cram-designators" "cram-executive" "cram-bullet-reasoning"
-               "cram-common-designators" "cram-urdf-projection"
-               "cram-object-knowledge" "cram-mobile-pick-place-plans"
-               "ros-load" "roslisp-utilities" "cram-bullet-world-tutorial" "cram-pepper-demo"))
+  :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms" "cram-plans/cram-native"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures"
+               "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
+               "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description"
+               "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
+               "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
+               "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"))
 
-(defsystem "roslisp-utilities"
+(defsystem "cram-plans/roslisp-utilities"
   :description "ROS integration without roslisp: init and cleanup functions, URDFs from the
 parameter server with the embedded files as fallback, the master probe, the belief state as TF
 edges and markers. STARTUP-ROS loads roslisp-utilities/ros (roslisp) when it is first called."
-  :depends-on ("cram-bullet-reasoning" "cl-transforms" "cram-robot-interfaces"
+  :depends-on ("cram-plans/cram-bullet-reasoning" "cram-plans/cl-transforms" "cram-plans/cram-robot-interfaces"
                "bordeaux-threads" "sb-bsd-sockets")
   :pathname "src/ros/"
   :serial t
@@ -218,16 +223,16 @@ edges and markers. STARTUP-ROS loads roslisp-utilities/ros (roslisp) when it is 
                (:file "belief-tf")
                (:file "belief-markers")))
 
-(defsystem "roslisp-utilities/ros-home"
+(defsystem "cram-plans/roslisp-utilities/ros-home"
   :description "Makes the ROS home directory before roslisp loads (roslisp hangs without it)."
-  :depends-on ("roslisp-utilities")
+  :depends-on ("cram-plans/roslisp-utilities")
   :pathname "src/ros/"
   :components ((:file "ros-home-now")))
 
-(defsystem "roslisp-utilities/ros"
+(defsystem "cram-plans/roslisp-utilities/ros"
   :description "The roslisp part of roslisp-utilities (Debian's roslisp and message systems):
 the node, parameters, publishing the belief state on /tf and /visualization_marker_array."
-  :depends-on ("roslisp-utilities" "roslisp-utilities/ros-home" "sb-posix"
+  :depends-on ("cram-plans/roslisp-utilities" "cram-plans/roslisp-utilities/ros-home" "sb-posix"
                "roslisp" "std_msgs-msg" "geometry_msgs-msg" "tf2_msgs-msg" "visualization_msgs-msg")
   :pathname "src/ros/"
   :serial t
@@ -236,33 +241,33 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
 
 ;;; Tests: one system per layer, all run by cram-plans-tests.
 
-(defsystem "cram-plans-tests/base"
+(defsystem "cram-plans/tests/base"
   :depends-on ("fiveam")
   :pathname "tests/"
   :components ((:file "suite")))
 
-(defsystem "cram-plans-tests/utilities"
-  :depends-on ("cram-plans-tests/base" "cram-utilities")
+(defsystem "cram-plans/tests/utilities"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-utilities")
   :pathname "tests/"
   :components ((:file "utilities-tests")))
 
-(defsystem "cram-plans-tests/prolog"
-  :depends-on ("cram-plans-tests/base" "cram-prolog")
+(defsystem "cram-plans/tests/prolog"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-prolog")
   :pathname "tests/"
   :serial t
   :components ((:file "prolog-tests")
                (:file "prolog-builtin-tests")
                (:file "prolog-engine-tests")))
 
-(defsystem "cram-plans-tests/transforms"
-  :depends-on ("cram-plans-tests/base" "cl-transforms")
+(defsystem "cram-plans/tests/transforms"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cl-transforms")
   :pathname "tests/"
   :serial t
   :components ((:file "transforms-tests")
                (:file "transforms-tf-tests")))
 
-(defsystem "cram-plans-tests/native"
-  :depends-on ("cram-plans-tests/base" "cram-native" "sb-posix")
+(defsystem "cram-plans/tests/native"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-native" "sb-posix")
   :pathname "tests/"
   :serial t
   :components ((:file "native-tests")
@@ -270,123 +275,123 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "native-fuzz-tests")
                (:file "native-ik-tests")))
 
-(defsystem "cram-plans-tests/language"
-  :depends-on ("cram-plans-tests/base" "cram-language" "cram-common-failures")
+(defsystem "cram-plans/tests/language"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-language" "cram-plans/cram-common-failures")
   :pathname "tests/"
   :serial t
   :components ((:file "language-tests")
                (:file "language-tree-tests")))
 
-(defsystem "cram-plans-tests/robots"
-  :depends-on ("cram-plans-tests/base" "cram-robot-interfaces" "cram-location-costmap"
-               "cram-pr2-description" "cram-pepper-description" "cxml")
+(defsystem "cram-plans/tests/robots"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
+               "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description" "cxml")
   :pathname "tests/"
   :serial t
   :components ((:file "robots-tests")
                (:file "robots-pepper-tests")
                (:file "robots-urdf-tests")))
 
-(defsystem "cram-plans-tests/designators"
-  :depends-on ("cram-plans-tests/base" "cram-designators")
+(defsystem "cram-plans/tests/designators"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-designators")
   :pathname "tests/"
   :serial t
   :components ((:file "designators-tests")
                (:file "designators-grounding-tests")))
 
-(defsystem "cram-plans-tests/executive"
-  :depends-on ("cram-plans-tests/base" "cram-executive")
+(defsystem "cram-plans/tests/executive"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-executive")
   :pathname "tests/"
   :serial t
   :components ((:file "executive-tests")))
 
-(defsystem "cram-plans-tests/btr"
-  :depends-on ("cram-plans-tests/base" "cram-bullet-reasoning" "cram-pr2-description")
+(defsystem "cram-plans/tests/btr"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")
   :pathname "tests/"
   :components ((:file "btr-tests")))
 
-(defsystem "cram-plans-tests/scripts"
-  :depends-on ("cram-plans-tests/base")
+(defsystem "cram-plans/tests/scripts"
+  :depends-on ("cram-plans/tests/base")
   :pathname "tests/"
   :components ((:file "scripts-tests")))
 
-(defsystem "cram-plans-tests/ros"
-  :depends-on ("cram-plans-tests/base" "roslisp-utilities" "roslisp-utilities/ros" "sb-posix")
+(defsystem "cram-plans/tests/ros"
+  :depends-on ("cram-plans/tests/base" "cram-plans/roslisp-utilities" "cram-plans/roslisp-utilities/ros" "sb-posix")
   :pathname "tests/"
   :serial t
   :components ((:file "ros-tests")
                (:file "ros-live-tests")))
 
-(defsystem "cram-plans-tests/urdf-proj"
-  :depends-on ("cram-plans-tests/base" "cram-urdf-projection" "cram-pr2-description"
-               "cram-pepper-description")
+(defsystem "cram-plans/tests/urdf-proj"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-pepper-description")
   :pathname "tests/"
   :serial t
   :components ((:file "urdf-proj-tests")))
 
-(defsystem "cram-plans-tests/costmap"
-  :depends-on ("cram-plans-tests/base" "cram-location-costmap" "cram-pr2-description")
+(defsystem "cram-plans/tests/costmap"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-location-costmap" "cram-plans/cram-pr2-description")
   :pathname "tests/"
   :serial t
   :components ((:file "costmap-tests")
                (:file "costmap-kitchen-tests")))
 
-(defsystem "cram-plans-tests"
+(defsystem "cram-plans/tests"
   :description "Every FiveAM suite of cram-plans, under the suite CRAM-PLANS-TESTS:ALL."
-  :depends-on ("cram-plans-tests/utilities" "cram-plans-tests/prolog"
-               "cram-plans-tests/transforms" "cram-plans-tests/native"
-               "cram-plans-tests/language"
-               "cram-plans-tests/robots"
-               "cram-plans-tests/designators" "cram-plans-tests/executive"
-               "cram-plans-tests/costmap"
-               "cram-plans-tests/btr" "cram-plans-tests/scripts"
-               "cram-plans-tests/ros" "cram-plans-tests/urdf-proj"
-               "cram-plans-tests/plans"))
+  :depends-on ("cram-plans/tests/utilities" "cram-plans/tests/prolog"
+               "cram-plans/tests/transforms" "cram-plans/tests/native"
+               "cram-plans/tests/language"
+               "cram-plans/tests/robots"
+               "cram-plans/tests/designators" "cram-plans/tests/executive"
+               "cram-plans/tests/costmap"
+               "cram-plans/tests/btr" "cram-plans/tests/scripts"
+               "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
+               "cram-plans/tests/plans"))
 
 ;;; Plans, object knowledge, tutorials and demos.
 
-(defsystem "cram-object-knowledge"
+(defsystem "cram-plans/cram-object-knowledge"
   :description "Manipulation interfaces (MAN-INT) and household object knowledge (OBJECTS):
 grasps, gripper openings and efforts, pick and place trajectories."
-  :depends-on ("cl-transforms")
+  :depends-on ("cram-plans/cl-transforms")
   :pathname "src/plans/"
   :serial t
   :components ((:file "manipulation-interfaces")
                (:file "object-knowledge")))
 
-(defsystem "cram-mobile-pick-place-plans"
+(defsystem "cram-plans/cram-mobile-pick-place-plans"
   :description "Action groundings and plans of mobile pick and place (PP-PLANS)."
-  :depends-on ("cram-prolog" "cram-utilities" "cl-transforms" "cram-designators"
-               "cram-language" "cram-common-failures" "cram-executive"
-               "cram-robot-interfaces" "cram-bullet-reasoning" "cram-object-knowledge")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms" "cram-plans/cram-designators"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-executive"
+               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge")
   :pathname "src/plans/"
   :serial t
   :components ((:file "pp-package")
                (:file "atomic-actions")
                (:file "pick-place")))
 
-(defsystem "ros-load"
+(defsystem "cram-plans/ros-load"
   :description "ROS-LOAD:LOAD-SYSTEM, mapping ROS package names to this project's systems."
   :pathname "src/tutorials/"
   :components ((:file "ros-load")))
 
-(defsystem "cram-bullet-world-tutorial"
+(defsystem "cram-plans/cram-bullet-world-tutorial"
   :description "The Bullet world tutorials (BTW-TUT): init-projection, move-bottle, switching two
 bottles."
-  :depends-on ("cram-prolog" "cram-utilities" "cl-transforms" "cram-designators"
-               "cram-language" "cram-common-failures" "cram-executive"
-               "cram-robot-interfaces" "cram-bullet-reasoning" "cram-pr2-description"
-               "cram-location-costmap" "cram-common-designators" "cram-urdf-projection"
-               "cram-object-knowledge" "cram-mobile-pick-place-plans" "ros-load"
-               "roslisp-utilities")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms" "cram-plans/cram-designators"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-executive"
+               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-location-costmap" "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans" "cram-plans/ros-load"
+               "cram-plans/roslisp-utilities")
   :pathname "src/tutorials/"
   :serial t
   :components ((:file "btw-tut-setup")
                (:file "btw-tut-move-bottle")
                (:file "btw-tut-switch-bottles")))
 
-(defsystem "cram-pepper-demo"
+(defsystem "cram-plans/cram-pepper-demo"
   :description "Pepper as a shopping assistant (DEMO): the shop, the menus, the product search."
-  :depends-on ("cram-bullet-world-tutorial" "cram-pepper-description")
+  :depends-on ("cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-description")
   :pathname "src/tutorials/"
   :serial t
   :components ((:file "pepper-setup")
@@ -394,7 +399,7 @@ bottles."
                (:file "pepper-plans")
                (:file "pepper-search")))
 
-(defsystem "cram-plans-tests/plans"
-  :depends-on ("cram-plans-tests/base" "cram-bullet-world-tutorial" "cram-pepper-demo")
+(defsystem "cram-plans/tests/plans"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
   :components ((:file "plans-tests")))

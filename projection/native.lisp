@@ -37,7 +37,7 @@
 
 (defun library-directory ()
   "Directory holding libcram_native.so (projection/native/build/ of the cram-native system)."
-  (asdf:system-relative-pathname "cram-native" "projection/native/build/"))
+  (asdf:system-relative-pathname "cram-plans/cram-native" "projection/native/build/"))
 
 (let ((lib (merge-pathnames "libcram_native.so" (library-directory))))
   (unless (probe-file lib)

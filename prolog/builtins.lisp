@@ -63,12 +63,33 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
                 function args e)
           (values nil nil)))))
 
+(sb-ext:defglobal **function-cache** (make-array 16 :initial-element nil)
+  "Direct-mapped cache of (symbol . function) for symbols found to name ordinary functions.")
+
+(defun named-function (symbol)
+  "The function SYMBOL names when it names one that is not a macro or special operator, else
+NIL. A cached entry is valid while SYMBOL's definition is still the same function object."
+  (declare (type symbol symbol))
+  (let* ((cache **function-cache**)
+         (i (logand (sxhash symbol) 15))
+         (entry (svref cache i)))
+    (if (and entry (eq (car entry) symbol) (fboundp symbol)
+             (eq (symbol-function symbol) (cdr entry)))
+        (cdr entry)
+        (when (and (fboundp symbol) (not (macro-function symbol))
+                   (not (special-operator-p symbol)))
+          (let ((function (symbol-function symbol)))
+            (setf (svref cache i) (cons symbol function))
+            function)))))
+
 (defun function-designator (term goal)
   (let ((f (deref term)))
     (when (functionp f)
       (return-from function-designator f))
-    (when (and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f)))
-      (return-from function-designator (symbol-function f)))
+    (when (symbolp f)
+      (let ((function (named-function f)))
+        (when function
+          (return-from function-designator function))))
     (setf f (lisp-argument f))
     (cond ((functionp f) f)
           ((and (symbolp f) (fboundp f) (not (macro-function f)) (not (special-operator-p f))) f)

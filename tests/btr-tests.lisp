@@ -11,7 +11,7 @@
 (def-suite btr :in cram-plans-tests:all :description "The Bullet belief state.")
 (in-suite btr)
 
-(defun resource (path) (asdf:system-relative-pathname "cram-bullet-reasoning" path))
+(defun resource (path) (asdf:system-relative-pathname "cram-plans/cram-bullet-reasoning" path))
 
 (defun fresh-world ()
   "A new world with a floor, made current."

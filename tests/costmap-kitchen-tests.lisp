@@ -10,7 +10,7 @@
 (defvar *kitchen-world* nil "The kitchen world the tests share, built once.")
 
 (defun main-file (relative)
-  (asdf:system-relative-pathname "cram-location-costmap" relative))
+  (asdf:system-relative-pathname "cram-plans/cram-location-costmap" relative))
 
 (defun build-kitchen-world ()
   (btr:register-ros-package "cram_plans_resources" (namestring (main-file "resources/")))

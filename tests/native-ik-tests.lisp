@@ -5,7 +5,7 @@
 
 (in-suite native)
 
-(defparameter *ik-pr2-urdf* (asdf:system-relative-pathname "cram-native" "robots/pr2/pr2.urdf"))
+(defparameter *ik-pr2-urdf* (asdf:system-relative-pathname "cram-plans/cram-native" "robots/pr2/pr2.urdf"))
 
 (defun pose-errors (a b)
   "Position (m) and rotation (rad) distance between the poses (vectors of 7) A and B."

@@ -62,7 +62,7 @@
 
 (defun robot-urdf-pathname (directory)
   "The project's URDF of the robot in robots/DIRECTORY/."
-  (asdf:system-relative-pathname "cram-robot-interfaces"
+  (asdf:system-relative-pathname "cram-plans/cram-robot-interfaces"
                                  (format nil "robots/~a/~a.urdf" directory directory)))
 
 (defmacro with-urdf ((model directory) &body body)

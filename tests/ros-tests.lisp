@@ -11,7 +11,7 @@
 
 (in-suite ros)
 
-(defun repo-file (path) (asdf:system-relative-pathname "roslisp-utilities" path))
+(defun repo-file (path) (asdf:system-relative-pathname "cram-plans/roslisp-utilities" path))
 
 (defun free-port ()
   "A TCP port on 127.0.0.1 that nothing listens on right now."
@@ -175,7 +175,7 @@ unset), restoring the previous values afterwards."
   (let ((out (uiop:run-program
               (list "sbcl" "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
                     "--eval" "(require :asdf)"
-                    "--eval" (format nil "(handler-bind ((warning #'muffle-warning)) (asdf:load-asd ~s) (asdf:load-system \"roslisp-utilities\"))"
+                    "--eval" (format nil "(handler-bind ((warning #'muffle-warning)) (asdf:load-asd ~s) (asdf:load-system \"cram-plans/roslisp-utilities\"))"
                                      (namestring (repo-file "cram-plans.asd")))
                     "--eval" "(defun my-init () t)"
                     "--eval" "(roslisp-utilities:register-ros-init-function my-init)"

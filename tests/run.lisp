@@ -4,5 +4,5 @@
 (require :asdf)
 (handler-bind ((warning #'muffle-warning))
   (asdf:load-asd (merge-pathnames "../cram-plans.asd" *load-truename*))
-  (asdf:load-system "cram-plans-tests"))
+  (asdf:load-system "cram-plans/tests"))
 (uiop:quit (if (uiop:symbol-call :cram-plans-tests :run-all) 0 1))

@@ -12,11 +12,11 @@
 
 (defun run-check-script (name)
   "Run tests/NAME from the repository root; return its exit code, output, passed and failed counts."
-  (let ((script (asdf:system-relative-pathname "cram-plans-tests/base" (format nil "tests/~a" name))))
+  (let ((script (asdf:system-relative-pathname "cram-plans/tests/base" (format nil "tests/~a" name))))
     (multiple-value-bind (out err code)
         (uiop:run-program (list "/bin/bash" (namestring script))
                           :output :string :error-output :output :ignore-error-status t
-                          :directory (asdf:system-relative-pathname "cram-plans-tests/base" ""))
+                          :directory (asdf:system-relative-pathname "cram-plans/tests/base" ""))
       (declare (ignore err))
       (let* ((line (find-if (lambda (l) (search " passed, " l))
                             (reverse (uiop:split-string out :separator '(#\Newline)))))

@@ -10,8 +10,8 @@
 
 (in-suite urdf-proj)
 
-(defvar *resources* (asdf:system-relative-pathname "cram-urdf-projection" "resources/"))
-(defvar *robots* (asdf:system-relative-pathname "cram-urdf-projection" "robots/"))
+(defvar *resources* (asdf:system-relative-pathname "cram-plans/cram-urdf-projection" "resources/"))
+(defvar *robots* (asdf:system-relative-pathname "cram-plans/cram-urdf-projection" "robots/"))
 
 (defun read-file (relative base) (uiop:read-file-string (merge-pathnames relative base)))
 

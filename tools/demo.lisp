@@ -7,8 +7,8 @@
                                                    :defaults (or *load-truename* *default-pathname-defaults*)))))
   (handler-bind ((warning #'muffle-warning))
     (asdf:load-asd (merge-pathnames "cram-plans.asd" root))
-    (asdf:load-system "cram-bullet-world-tutorial")
-    (asdf:load-system "cram-pepper-demo")
+    (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
+    (asdf:load-system "cram-plans/cram-pepper-demo")
     (asdf:load-system "yason")))
 
 (defpackage :cram-plans-demo

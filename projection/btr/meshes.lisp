@@ -92,7 +92,7 @@ entries are replaced. Returns the keywords."
 
 (defun project-resources-directory ()
   "The resources/ directory of cram-plans (models, meshes, maps)."
-  (asdf:system-relative-pathname "cram-bullet-reasoning" "resources/"))
+  (asdf:system-relative-pathname "cram-plans/cram-bullet-reasoning" "resources/"))
 
 (defun register-project-meshes ()
   "Register the ROS package cram_plans_resources (this project's resources/) and put its meshes

@@ -12,7 +12,7 @@ repository root (where cram-plans.asd is)."
   (let ((p (pathname path)))
     (if (uiop:absolute-pathname-p p)
         p
-        (asdf:system-relative-pathname "roslisp-utilities" p))))
+        (asdf:system-relative-pathname "cram-plans/roslisp-utilities" p))))
 
 (defun read-fallback-file (fallback-file parameter why)
   "The text of FALLBACK-FILE and its truename; an error naming it (and PARAMETER, WHY) otherwise."

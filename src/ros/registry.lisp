@@ -95,7 +95,7 @@ roslisp's shape."
   "Load the system roslisp-utilities/ros (roslisp and the message systems) unless it is loaded."
   (unless *node-status-function*
     (handler-bind ((warning #'muffle-warning))
-      (asdf:load-system "roslisp-utilities/ros")))
+      (asdf:load-system "cram-plans/roslisp-utilities/ros")))
   t)
 
 (defun check-node-name (name)

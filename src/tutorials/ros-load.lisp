@@ -16,14 +16,14 @@
   "The ROS package whose system LOAD-SYSTEM is loading.")
 
 (defparameter *ros-package-systems*
-  '(("cram_bullet_world_tutorial" . "cram-bullet-world-tutorial")
-    ("cram_pepper_demo" . "cram-pepper-demo")
-    ("cram_pepper_description" . "cram-pepper-description")
-    ("cram_pr2_description" . "cram-pr2-description")
-    ("cram_mobile_pick_place_plans" . "cram-mobile-pick-place-plans")
-    ("cram_object_knowledge" . "cram-object-knowledge")
-    ("cram_urdf_projection" . "cram-urdf-projection")
-    ("cram_bullet_reasoning" . "cram-bullet-reasoning"))
+  '(("cram_bullet_world_tutorial" . "cram-plans/cram-bullet-world-tutorial")
+    ("cram_pepper_demo" . "cram-plans/cram-pepper-demo")
+    ("cram_pepper_description" . "cram-plans/cram-pepper-description")
+    ("cram_pr2_description" . "cram-plans/cram-pr2-description")
+    ("cram_mobile_pick_place_plans" . "cram-plans/cram-mobile-pick-place-plans")
+    ("cram_object_knowledge" . "cram-plans/cram-object-knowledge")
+    ("cram_urdf_projection" . "cram-plans/cram-urdf-projection")
+    ("cram_bullet_reasoning" . "cram-plans/cram-bullet-reasoning"))
   "ROS package name → the ASDF system that provides it in cram-plans.")
 
 (defun ros-package-system-name (ros-package)
@@ -44,6 +44,10 @@ the one ROS-PACKAGE maps to. FORCE recompiles. Returns the system's name."
                       (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system))))
           (*current-ros-package* ros-package))
       (ros-package-system-name ros-package)
+      ;; this project's systems live in cram-plans.asd as cram-plans/NAME
+      (unless (asdf:find-system name nil)
+        (let ((ours (concatenate 'string "cram-plans/" name)))
+          (when (asdf:find-system ours nil) (setf name ours))))
       (unless (asdf:find-system name nil)
         (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s." name ros-package))
       (asdf:load-system name :force force)

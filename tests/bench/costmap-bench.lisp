@@ -4,7 +4,7 @@
 
 (require :asdf)
 (asdf:load-asd (merge-pathnames "../../cram-plans.asd" *load-truename*))
-(asdf:load-system "cram-plans-tests/costmap")
+(asdf:load-system "cram-plans/tests/costmap")
 
 (defpackage :cram-bench.costmap
   (:use :cl :cram-bench))

@@ -4,7 +4,7 @@
 
 (require :asdf)
 (asdf:load-asd (merge-pathnames "../../cram-plans.asd" *load-truename*))
-(asdf:load-system "cram-executive")
+(asdf:load-system "cram-plans/cram-executive")
 
 (defpackage :cram-bench.designators
   (:use :cl :cram-bench))

@@ -8,8 +8,8 @@
 (require :asdf)
 (asdf:load-asd (merge-pathnames "../../cram-plans.asd" *load-truename*))
 (handler-bind ((warning #'muffle-warning))
-  (asdf:load-system "cram-urdf-projection")
-  (asdf:load-system "cram-pr2-description"))
+  (asdf:load-system "cram-plans/cram-urdf-projection")
+  (asdf:load-system "cram-plans/cram-pr2-description"))
 
 (defpackage :cram-bench.ik
   (:use :cl :cram-bench))
@@ -23,7 +23,7 @@
   (rob-int:set-robot-name :pr2)
   (let ((w (make-instance 'btr:bt-reasoning-world)))
     (btr:add-object w :urdf :pr2 '((0 0 0) (0 0 0 1))
-                    :urdf (uiop:read-file-string (asdf:system-relative-pathname "cram-urdf-projection" "robots/pr2/pr2.urdf")))
+                    :urdf (uiop:read-file-string (asdf:system-relative-pathname "cram-plans/cram-urdf-projection" "robots/pr2/pr2.urdf")))
     w))
 
 (defun cases (chain n seed)

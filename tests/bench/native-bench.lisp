@@ -3,12 +3,12 @@
 
 (require :asdf)
 (require :sb-posix)
-(asdf:load-system "cram-native")
+(asdf:load-system "cram-plans/cram-native")
 
 (defpackage :cram-native-bench (:use :cl :cram-native))
 (in-package :cram-native-bench)
 
-(defparameter *native-dir* (asdf:system-relative-pathname "cram-native" "projection/native/"))
+(defparameter *native-dir* (asdf:system-relative-pathname "cram-plans/cram-native" "projection/native/"))
 (defparameter *pr2-urdf* #p"/work/shared/models/pr2_description/urdf/pr2.urdf")
 
 (defun chain-urdf (n)
@@ -62,7 +62,7 @@ of raw_bench.cpp."
 ;;; IK on random reachable poses of the PR2 arms
 
 (defparameter *ik-urdf*
-  (let ((own (asdf:system-relative-pathname "cram-native" "robots/pr2/pr2.urdf")))
+  (let ((own (asdf:system-relative-pathname "cram-plans/cram-native" "robots/pr2/pr2.urdf")))
     (if (probe-file own) own *pr2-urdf*))
   "The PR2 model of the IK benchmark.")
 

@@ -3,7 +3,7 @@
 ;;;; programs as ../shared/bench/bench_nrev.pl and bench_facts.pl in the CRAM dialect.
 
 (require :asdf)
-(asdf:load-system "cram-prolog")
+(asdf:load-system "cram-plans/cram-prolog")
 
 (defpackage :cram-prolog-bench
   (:use :cl :cram-prolog :cram-utilities :cram-bench))
@@ -12,7 +12,7 @@
 
 (defun bench-script (name)
   "The peer script NAME from ../shared/bench/ next to the repository, or /work/shared/bench/."
-  (let* ((root (asdf:system-source-directory "cram-prolog"))
+  (let* ((root (asdf:system-source-directory "cram-plans/cram-prolog"))
          (local (merge-pathnames (concatenate 'string "../shared/bench/" name) root)))
     (namestring (or (probe-file local)
                     (probe-file (concatenate 'string "/work/shared/bench/" name))

@@ -3,7 +3,7 @@
 
 (require :asdf)
 (asdf:load-asd (merge-pathnames "../../cram-plans.asd" *load-truename*))
-(asdf:load-system "cl-transforms")
+(asdf:load-system "cram-plans/cl-transforms")
 
 (defpackage :cram-bench.transforms
   (:use :cl :cram-bench))
