@@ -335,6 +335,11 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "costmap-tests")
                (:file "costmap-kitchen-tests")))
 
+(defsystem "cram-plans/tests/runner"
+  :depends-on ("cram-plans/tests/base" "yason" "sb-posix")
+  :pathname "tests/"
+  :components ((:file "runner-tests")))
+
 (defsystem "cram-plans/tests"
   :description "Every FiveAM suite of cram-plans, under the suite CRAM-PLANS-TESTS:ALL."
   :depends-on ("cram-plans/tests/utilities" "cram-plans/tests/prolog"
@@ -345,7 +350,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/costmap"
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
-               "cram-plans/tests/plans"))
+               "cram-plans/tests/plans" "cram-plans/tests/runner"))
 
 ;;; Plans, object knowledge, tutorials and demos.
 

@@ -9,7 +9,8 @@
     (asdf:load-asd (merge-pathnames "cram-plans.asd" root))
     (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
     (asdf:load-system "cram-plans/cram-pepper-demo")
-    (asdf:load-system "yason")))
+    (asdf:load-system "yason")
+    (require :sb-posix)))
 
 (defpackage :cram-plans-demo
   (:use :cl)
@@ -17,6 +18,10 @@
            #:summarize #:read-json-lines #:*tolerance*))
 
 (in-package :cram-plans-demo)
+
+(defparameter *tools-directory*
+  (make-pathname :name nil :type nil :defaults (or *load-truename* *default-pathname-defaults*))
+  "The tools/ directory of cram-plans.")
 
 (defparameter *tolerance* 0.03
   "Metres within which the bottle must end at BTW-TUT:*FINAL-OBJECT-DESTINATION*.")
@@ -101,3 +106,5 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
             (namestring dir))
     (finish-output)
     (uiop:quit (if (getf result :success) 0 1))))
+
+(load (merge-pathnames "runner.lisp" *tools-directory*))
