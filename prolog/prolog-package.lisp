@@ -6,7 +6,7 @@
   (:documentation "The CRAM-dialect fact engine.
 
 Clauses are compiled into closures (continuation passing, variables bound destructively and
-undone through a trail, first-argument indexing for predicates with 8 or more clauses,
+undone through a trail, first-argument indexing of every predicate,
 recompiled on the first call after their fact groups change). PROLOG returns a lazy list: each
 further solution resumes the solver from its choice-point stack. Deterministic tail recursion
 runs in constant Lisp stack; running out of stack or heap signals PROLOG-RESOURCE-ERROR.
