@@ -387,18 +387,8 @@ int cn_visibility(int wh, const double *cam7, int convention, double fov, int wi
         if (ob >= 0 && ob != oh) occluders.insert(ob);
       }
     // 3. the target alone with the camera turned towards it
-    double aabb[6];
-    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
-    bool any = false;
-    for_each_rb(o, [&](btRigidBody *rb, int l) {
-      if (link >= 0 && l != link) return;
-      btVector3 a, b;
-      rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
-      lo.setMin(a);
-      hi.setMax(b);
-      any = true;
-    });
-    (void)aabb;
+    btVector3 lo, hi;
+    bool any = union_aabb(o, link, lo, hi);
     btVector3 center = any ? (lo + hi) * 0.5 : frame_pose(o, link).getOrigin();
     size_t total = in_view;
     btVector3 eye = cam.pose.getOrigin();

@@ -484,6 +484,25 @@ int cn_object_get_collision_filter(int wh, int oh, int *out) {
   });
 }
 
+}  // extern "C"
+
+bool cn::union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi) {
+  lo = btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
+  hi = -lo;
+  bool any = false;
+  for_each_rb(o, [&](btRigidBody *rb, int l) {
+    if (link >= 0 && l != link) return;
+    btVector3 a, b;
+    rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
+    lo.setMin(a);
+    hi.setMax(b);
+    any = true;
+  });
+  return any;
+}
+
+extern "C" {
+
 int cn_object_aabb(int wh, int oh, int link, double *out) {
   return guard([&] {
     Object &o = world(wh).obj(oh);
@@ -493,17 +512,8 @@ int cn_object_aabb(int wh, int oh, int link, double *out) {
     if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
       fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
            (int)o.link_rb.size() - 1, oh);
-    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
-    bool any = false;
-    for_each_rb(o, [&](btRigidBody *rb, int l) {
-      if (link >= 0 && l != link) return;
-      btVector3 a, b;
-      rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
-      lo.setMin(a);
-      hi.setMax(b);
-      any = true;
-    });
-    if (!any) {
+    btVector3 lo, hi;
+    if (!union_aabb(o, link, lo, hi)) {
       btVector3 p = frame_pose(o, link).getOrigin();
       lo = hi = p;
     }
