@@ -22,7 +22,6 @@
     `(if (not (probe-file *ik-pr2-urdf*))
          (skip "no PR2 model at ~a" *ik-pr2-urdf*)
          (progn
-           (add-search-dir "/work/shared/models")
            (with-world (,w)
              (let* ((,r (add-urdf ,w (uiop:read-file-string *ik-pr2-urdf*)))
                     (,chain (make-chain ,w ,r "torso_lift_link" ,tip)))
@@ -84,7 +83,6 @@ a list of problems (answers off the target, outside the limits, or with wrong re
   (if (not (probe-file *ik-pr2-urdf*))
       (skip "no PR2 model at ~a" *ik-pr2-urdf*)
       (progn
-        (add-search-dir "/work/shared/models")
         (with-world (w)
           (let ((r (add-urdf w (uiop:read-file-string *ik-pr2-urdf*))))
             ;; base_link -> tool frame: the prismatic torso joint and the arm (8 joints)
