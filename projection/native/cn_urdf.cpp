@@ -338,6 +338,19 @@ static Object &robot_joint(World &w, int r, int joint) {
 
 using namespace cn;
 
+// Parsed models by URDF text: a plan that rebuilds its world (init-projection) does not parse
+// the same kitchen and robot again. Models are immutable and shared; the cache is bounded.
+static ModelP cached_model(const std::string &xml, bool exact) {
+  static std::unordered_map<std::string, ModelP> cache[2];
+  auto &c = cache[exact ? 1 : 0];
+  auto it = c.find(xml);
+  if (it != c.end()) return it->second;
+  ModelP m = parse_urdf(xml, exact);
+  if (c.size() >= 16) c.clear();
+  c.emplace(xml, m);
+  return m;
+}
+
 extern "C" {
 
 int cn_robot_add_urdf(int wh, const char *xml, const double *pose, int flags) {
@@ -346,7 +359,7 @@ int cn_robot_add_urdf(int wh, const char *xml, const double *pose, int flags) {
     std::string x = check_str(xml, "URDF string");
     btTransform base = read_pose(pose, "base pose");
     if (flags & ~CN_URDF_EXACT_MESHES) fail(CN_E_ARG, "unknown URDF flags %d", flags);
-    ModelP m = parse_urdf(x, flags & CN_URDF_EXACT_MESHES);
+    ModelP m = cached_model(x, flags & CN_URDF_EXACT_MESHES);
     std::unique_ptr<Object> o(new Object);
     o->kind = CN_ARTICULATED;
     o->model = m;

@@ -285,10 +285,42 @@ int cn_world_get_gravity(int wh, double *out) {
   });
 }
 
+}  // extern "C"
+
+namespace {
+// Kinematic bodies (robot and environment links, rigidly attached objects) stand still while
+// the physics runs: put them to sleep so that Bullet neither saves their kinematic state nor
+// recomputes their bounding boxes every step, and wake them when the steps are done. Dynamic
+// bodies still collide with them (one active body of a pair is enough).
+struct KinematicRest {
+  btDiscreteDynamicsWorld *dw;
+  std::vector<btCollisionObject *> slept;
+  explicit KinematicRest(btDiscreteDynamicsWorld *d) : dw(d) {
+    dw->updateAabbs();  // bounding boxes of everything teleported since the last query
+    btCollisionObjectArray &all = dw->getCollisionObjectArray();
+    for (int i = 0; i < all.size(); ++i) {
+      btCollisionObject *co = all[i];
+      if (co->isKinematicObject() && co->getActivationState() == DISABLE_DEACTIVATION) {
+        co->forceActivationState(ISLAND_SLEEPING);
+        slept.push_back(co);
+      }
+    }
+    dw->setForceUpdateAllAabbs(false);
+  }
+  ~KinematicRest() {
+    for (btCollisionObject *co : slept) co->forceActivationState(DISABLE_DEACTIVATION);
+    dw->setForceUpdateAllAabbs(true);
+  }
+};
+}  // namespace
+
+extern "C" {
+
 int cn_world_step(int wh, double dt) {
   return guard([&] {
     World &w = world(wh);
     check_positive(dt, "time step dt");
+    KinematicRest rest(w.dw);
     w.dw->stepSimulation(dt, 0, dt);
     return 0;
   });
@@ -302,6 +334,7 @@ int cn_world_simulate(int wh, double seconds, double dt) {
     double steps = std::ceil(seconds / dt - 1e-9);
     if (steps > 1e8) fail(CN_E_ARG, "simulate %g s at dt %g needs %g steps, limit 1e8", seconds, dt, steps);
     int n = (int)steps;
+    KinematicRest rest(w.dw);
     for (int i = 0; i < n; ++i) w.dw->stepSimulation(dt, 0, dt);
     return n;
   });
