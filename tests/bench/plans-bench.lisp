@@ -36,7 +36,9 @@
                                 "--results" results)
                           :output :string :error-output :string :ignore-error-status t)
       (unless (eql code 0)
-        (error "batch exited with ~a: ~a" code (subseq err (max 0 (- (length err) 600)))))
+        (error "batch exited with ~a: ~a" code
+               (let ((at (or (search "Unhandled" err) (search "error" err) 0)))
+                 (subseq err at (min (length err) (+ at 300))))))
       (when (probe-file results) (delete-file results))
       (values (- (now-seconds) start)
               (let ((p (search " succeeded (" out)))
