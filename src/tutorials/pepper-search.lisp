@@ -202,4 +202,4 @@ towards each look target. Returns the perceived designator or NIL."
 
 (defun move-human-to-location ()
   "Bring the human next to the robot."
-  (setf (btr:pose (btr:object btr:*current-bullet-world* :my-human)) (get-human-new-pose)))
+  (setf (btr:pose (btr-utils:object-instance :my-human)) (get-human-new-pose)))
