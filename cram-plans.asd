@@ -2,9 +2,11 @@
 ;;;; Each layer's files are listed in its own DEFSYSTEM form below.
 
 ;; Debian's cxml.asd defines several primary systems in one file, which makes ASDF warn
-;; on every load; load it once here with those warnings muffled.
-(handler-bind ((warning #'muffle-warning))
-  (asdf:load-system "cxml"))
+;; on every load; load it once here with those warnings muffled (not again when ASDF re-reads
+;; this file).
+(unless (asdf:component-loaded-p "cxml")
+  (handler-bind ((warning #'muffle-warning))
+    (asdf:load-system "cxml")))
 
 (defsystem "cram-plans/cram-utilities"
   :description "Lazy lists, variable bindings and small utilities (package CUT)."
