@@ -274,6 +274,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "native-tests")
                (:file "native-tests-2")
+               (:file "native-tests-3")
                (:file "native-fuzz-tests")
                (:file "native-ik-tests")))
 

@@ -14,22 +14,30 @@
 (defcn "cn_detach" :int (w :int) (o :int) (p :int))
 (defcn "cn_attachments" :int (w :int) (out :pointer) (cap :int))
 
-(defvar *pair-capacity* 256 "Initial capacity of the contact pair buffers.")
+(defvar *pair-capacity* 256 "Smallest heap capacity of the contact pair buffers when 32 pairs do not suffice.")
+
+(defun %pairs-list (iv dv n)
+  (loop for i below n
+        collect (list (aref iv (* 4 i)) (aref iv (+ 1 (* 4 i)))
+                      (aref iv (+ 2 (* 4 i))) (aref iv (+ 3 (* 4 i)))
+                      (aref dv i))))
 
 (defun %collect-pairs (fn)
   "Call FN with (ints doubles cap) until the buffers are large enough; return a list of
-(obj-a link-a obj-b link-b distance)."
-  (let ((cap *pair-capacity*))
-    (loop
-      (let ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
-            (dv (make-dvec cap)))
-        (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
-          (when (<= n cap)
-            (return (loop for i below n
-                          collect (list (aref iv (* 4 i)) (aref iv (+ 1 (* 4 i)))
-                                        (aref iv (+ 2 (* 4 i))) (aref iv (+ 3 (* 4 i)))
-                                        (aref dv i)))))
-          (setf cap n))))))
+(obj-a link-a obj-b link-b distance).  The first try uses buffers on the stack."
+  (let ((iv (make-array (* 4 32) :element-type '(signed-byte 32)))
+        (dv (make-array 32 :element-type 'double-float)))
+    (declare (dynamic-extent iv dv))
+    (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd 32))))
+      (if (<= n 32)
+          (%pairs-list iv dv n)
+          (let ((cap (max n *pair-capacity*)))
+            (loop
+              (let ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
+                    (dv (make-dvec cap)))
+                (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
+                  (when (<= n cap) (return (%pairs-list iv dv n)))
+                  (setf cap n)))))))))
 
 (defun world-contacts (world &key (threshold 0d0))
   "Every pair of objects of WORLD whose closest distance is <= THRESHOLD (0: touching or

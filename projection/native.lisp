@@ -73,11 +73,12 @@ floating point exceptions inside foreign calls otherwise)."
   (error 'native-error :function function :code -2 :message (apply #'format nil fmt args)))
 
 (defmacro ccall (cname &rest args)
-  "Call the foreign function of CNAME with ARGS, traps masked and interrupts deferred (a plan
-thread that is evaporated never unwinds out of the middle of a native call); signal
-NATIVE-ERROR on a negative result, else return the result."
+  "Call the foreign function of CNAME with ARGS, interrupts deferred (a plan thread that is
+evaporated never unwinds out of the middle of a native call); signal NATIVE-ERROR on a
+negative result, else return the result.  The shim masks floating point traps itself for the
+duration of every call and restores the caller's modes on return."
   (let ((r (gensym "R")) (sym (intern (format nil "%~:@(~a~)" (substitute #\- #\_ cname)))))
-    `(let ((,r (sb-sys:without-interrupts (with-float-traps-masked* (,sym ,@args)))))
+    `(let ((,r (sb-sys:without-interrupts (,sym ,@args))))
        (declare (type (signed-byte 32) ,r))
        (if (minusp ,r) (signal-native-error ,cname ,r) ,r))))
 

@@ -82,16 +82,35 @@ double check_nonneg(double v, const char *what) {
 
 btTransform read_pose(const double *p, const char *what) {
   if (!p) fail(CN_E_ARG, "%s is a null pointer", what);
-  for (int i = 0; i < 7; ++i)
-    if (!std::isfinite(p[i]))
-      fail(CN_E_ARG, "%s has %s in component %d (%s)", what,
-           std::isnan(p[i]) ? "NaN" : "an infinity", i,
-           (const char *[]){"x", "y", "z", "qx", "qy", "qz", "qw"}[i]);
-  double n = std::sqrt(p[3] * p[3] + p[4] * p[4] + p[5] * p[5] + p[6] * p[6]);
-  if (n < 1e-9)
+  bool finite = true;
+  for (int i = 0; i < 7; ++i) finite &= std::isfinite(p[i]);
+  if (!finite)
+    for (int i = 0; i < 7; ++i)
+      if (!std::isfinite(p[i]))
+        fail(CN_E_ARG, "%s has %s in component %d (%s)", what,
+             std::isnan(p[i]) ? "NaN" : "an infinity", i,
+             (const char *[]){"x", "y", "z", "qx", "qy", "qz", "qw"}[i]);
+  btTransform t;
+  if (!pose_into(p, t))
     fail(CN_E_ARG, "%s has a zero quaternion (%g %g %g %g)", what, p[3], p[4], p[5], p[6]);
-  return btTransform(btQuaternion(p[3] / n, p[4] / n, p[5] / n, p[6] / n),
-                     btVector3(p[0], p[1], p[2]));
+  return t;
+}
+
+bool fp_tame(const double *p, int n) {
+#if defined(__x86_64__) || defined(__i386__)
+  const unsigned quiet = 0x0800u | 0x0100u | 0x1000u;  // underflow, denormal, precision masked
+  if ((_mm_getcsr() & quiet) != quiet || !p) return false;
+  for (int i = 0; i < n; ++i) {  // on the bits: no floating point operation may trap here
+    uint64_t b;
+    std::memcpy(&b, p + i, 8);
+    int e = (int)((b >> 52) & 0x7ff);  // biased binary exponent: 1023 +- 330 is about 1e+-100
+    if ((b << 1) != 0 && (e < 1023 - 330 || e > 1023 + 330)) return false;  // NaN, inf too
+  }
+  return true;
+#else
+  (void)p, (void)n;
+  return false;
+#endif
 }
 
 void write_pose(const btTransform &t, double *o) {
@@ -291,10 +310,12 @@ int cn_resolve_path(const char *uri, const char *base_dir, char *out, int cap) {
 }
 
 int cn_world_alive(int w) {
+  FpMasked fp;
   std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
   return world_ok(w) ? 1 : 0;
 }
 int cn_world_count(void) {
+  FpMasked fp;
   std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
   return g_live;
 }

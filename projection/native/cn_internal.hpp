@@ -15,6 +15,11 @@
 #include <string>
 #include <unordered_map>
 #include <vector>
+#if defined(__x86_64__) || defined(__i386__)
+#include <xmmintrin.h>
+#else
+#include <cfenv>
+#endif
 
 namespace cn {
 
@@ -35,7 +40,26 @@ int guard_exception();  // call inside catch(...): converts the active exception
 // and worlds share collision shapes, meshes and the registries.
 std::recursive_mutex &api_mutex();
 
-template <class F> inline int guard(F &&f) {
+// The caller's floating point environment (SBCL traps on invalid, overflow and division by
+// zero) is replaced by "all exceptions masked" for the duration of a call and restored, flags
+// included, on return: Bullet, FCL, assimp and llvmpipe compute with infinities and NaNs
+// internally, and their worker threads inherit the masked environment.
+struct FpMasked {
+#if defined(__x86_64__) || defined(__i386__)
+  unsigned csr;
+  FpMasked() : csr(_mm_getcsr()) { _mm_setcsr((csr | 0x1F80u) & ~0x3Fu); }
+  ~FpMasked() { _mm_setcsr(csr); }
+#else
+  std::fenv_t env;
+  FpMasked() { std::feholdexcept(&env); }
+  ~FpMasked() { std::fesetenv(&env); }
+#endif
+  FpMasked(const FpMasked &) = delete;
+  FpMasked &operator=(const FpMasked &) = delete;
+};
+
+// The lock and the exception barrier, without touching the floating point environment.
+template <class F> inline int guard_unmasked(F &&f) {
   std::lock_guard<std::recursive_mutex> lock(api_mutex());
   try {
     return f();
@@ -44,12 +68,42 @@ template <class F> inline int guard(F &&f) {
   }
 }
 
+template <class F> inline int guard(F &&f) {
+  FpMasked fp;
+  return guard_unmasked(f);
+}
+
+// True when the calling thread traps at most invalid, overflow and division by zero (SBCL's
+// default; underflow, denormal and inexact masked) and each of the N values at P is zero or of
+// magnitude in about [1e-100, 1e100] (binary exponent within +-330). Normalising and copying such a pose cannot raise any of those
+// three, so an entry point that does nothing else may skip FpMasked, whose two writes of the
+// control register cost more than the teleport itself.
+bool fp_tame(const double *p, int n);
+
 // ---- argument checks -----------------------------------------------------------------------
 void check_ptr(const void *p, const char *what);
 double check_finite(double v, const char *what);
 double check_positive(double v, const char *what);     // finite and > 0
 double check_nonneg(double v, const char *what);       // finite and >= 0
 btTransform read_pose(const double *p7, const char *what = "pose");
+
+// The pose x y z qx qy qz qw at P (finite) into T, the quaternion normalised on the fly
+// (s = 2 / |q|^2); false, T untouched, when |q| < 1e-9.
+inline bool pose_into(const double *p, btTransform &t) {
+  double x = p[3], y = p[4], z = p[5], w = p[6];
+  double n2 = x * x + y * y + z * z + w * w;
+  if (!(n2 >= 1e-18)) return false;
+  double s = (n2 == 1.0) ? 2.0 : 2.0 / n2;
+  double xs = x * s, ys = y * s, zs = z * s;
+  double wx = w * xs, wy = w * ys, wz = w * zs;
+  double xx = x * xs, xy = x * ys, xz = x * zs;
+  double yy = y * ys, yz = y * zs, zz = z * zs;
+  t.getBasis().setValue(1.0 - (yy + zz), xy - wz, xz + wy,
+                        xy + wz, 1.0 - (xx + zz), yz - wx,
+                        xz - wy, yz + wx, 1.0 - (xx + yy));
+  t.getOrigin().setValue(p[0], p[1], p[2]);
+  return true;
+}
 void write_pose(const btTransform &t, double *out7);
 std::string check_str(const char *s, const char *what);
 
@@ -165,6 +219,10 @@ struct World {
   std::vector<Object *> objects;          // index = handle; null = removed
   std::vector<Attachment> attachments;
   std::set<std::array<int, 4>> ignored;   // (objA, linkA, objB, linkB), A <= B
+  // Bodies teleported since the last query (flag: user index 3 == 1). Their broadphase
+  // bounding boxes are brought up to date once, by sync_aabbs(), before the next query that
+  // reads the broadphase (contacts, rays, distances, physics) or before bodies are deleted.
+  std::vector<btCollisionObject *> stale_aabbs;
   World(const btVector3 &gravity);
   ~World();
   Object &obj(int h, const char *what = "object");
@@ -180,7 +238,9 @@ void world_unregister(int h);
 // operations used across files
 btRigidBody *new_body(World &w, Object &o, const ShapeP &s, double mass, const btTransform &t);
 void add_rb(World &w, btRigidBody *rb, int group, int mask);
-void teleport_rb(World &w, btRigidBody *rb, const btTransform &t);
+void teleport_rb(World &w, btRigidBody *rb, const btTransform &t);  // AABB update deferred
+bool teleport_rb_tame(World &w, btRigidBody *rb, const double *pose7);  // false: zero quaternion
+void sync_aabbs(World &w);  // broadphase AABBs of the bodies teleported since the last sync
 void set_object_pose(World &w, Object &o, const btTransform &t);
 btTransform object_pose(const Object &o);
 btTransform frame_pose(const Object &o, int link);   // link pose or body pose

@@ -12,12 +12,19 @@ static PairKey make_key(int oa, int la, int ob, int lb) {
   return {oa, la, ob, lb};
 }
 
-static int write_pairs(const std::map<PairKey, double> &pairs, int *out4, double *dist, int cap) {
+// Contact pairs as collected: one entry per contact point, merged by write_pairs.
+using PairList = std::vector<std::pair<PairKey, double>>;
+
+// Sort PAIRS by key, keep the smallest distance of each pair, write up to CAP of them; return
+// how many distinct pairs there are.
+static int write_pairs(PairList &pairs, int *out4, double *dist, int cap) {
+  std::sort(pairs.begin(), pairs.end());  // equal keys: smallest distance first
   int n = 0;
-  for (auto &p : pairs) {
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    if (i > 0 && pairs[i].first == pairs[i - 1].first) continue;
     if (n < cap) {
-      for (int k = 0; k < 4; ++k) out4[4 * n + k] = p.first[k];
-      dist[n] = p.second;
+      for (int k = 0; k < 4; ++k) out4[4 * n + k] = pairs[i].first[k];
+      dist[n] = pairs[i].second;
     }
     ++n;
   }
@@ -36,8 +43,8 @@ struct ObjectContacts : btCollisionWorld::ContactResultCallback {
   World &w;
   int self;
   double threshold;
-  std::map<PairKey, double> &pairs;
-  ObjectContacts(World &wd, int s, double t, std::map<PairKey, double> &p, int group, int mask)
+  PairList &pairs;
+  ObjectContacts(World &wd, int s, double t, PairList &p, int group, int mask)
       : w(wd), self(s), threshold(t), pairs(p) {
     m_collisionFilterGroup = group;
     m_collisionFilterMask = mask;
@@ -56,10 +63,7 @@ struct ObjectContacts : btCollisionWorld::ContactResultCallback {
     decode_rb(b->getCollisionObject(), ob, lb);
     if (oa != self) { std::swap(oa, ob); std::swap(la, lb); }
     if (w.pair_ignored(oa, la, ob, lb)) return 0;
-    PairKey k{oa, la, ob, lb};
-    auto it = pairs.find(k);
-    if (it == pairs.end()) pairs[k] = cp.getDistance();
-    else it->second = std::min(it->second, (double)cp.getDistance());
+    pairs.push_back({PairKey{oa, la, ob, lb}, (double)cp.getDistance()});
     return 0;
   }
 };
@@ -128,6 +132,7 @@ extern "C" {
 int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);
+    sync_aabbs(w);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
     set_query_all(w, true);
@@ -138,7 +143,7 @@ int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap
       throw;
     }
     set_query_all(w, false);
-    std::map<PairKey, double> pairs;
+    PairList pairs;
     btDispatcher *d = w.dw->getDispatcher();
     for (int i = 0; i < d->getNumManifolds(); ++i) {
       btPersistentManifold *m = d->getManifoldByIndexInternal(i);
@@ -150,10 +155,7 @@ int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap
       decode_rb(m->getBody0(), oa, la);
       decode_rb(m->getBody1(), ob, lb);
       if (w.pair_ignored(oa, la, ob, lb)) continue;
-      PairKey k = make_key(oa, la, ob, lb);
-      auto it = pairs.find(k);
-      if (it == pairs.end()) pairs[k] = md;
-      else it->second = std::min(it->second, md);
+      pairs.push_back({make_key(oa, la, ob, lb), md});
     }
     return write_pairs(pairs, out4, dist, cap);
   });
@@ -162,10 +164,11 @@ int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap
 int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);
+    sync_aabbs(w);
     Object &o = w.obj(oh);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
-    std::map<PairKey, double> pairs;
+    PairList pairs;
     for_each_rb(o, [&](btRigidBody *rb, int) {
       auto *bp = rb->getBroadphaseHandle();
       ObjectContacts cb(w, oh, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
@@ -184,7 +187,7 @@ int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist
           if (w.ignored.count(make_key(oh, a, oh, b))) continue;
           PairDistance pd(o.link_rb[i], threshold);
           w.dw->contactPairTest(o.link_rb[i], o.link_rb[j], pd);
-          if (pd.found && pd.best <= threshold) pairs[{oh, a, oh, b}] = pd.best;
+          if (pd.found && pd.best <= threshold) pairs.push_back({PairKey{oh, a, oh, b}, pd.best});
         }
     }
     return write_pairs(pairs, out4, dist, cap);
@@ -194,6 +197,7 @@ int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist
 int cn_closest_distance(int wh, int oa, int la, int ob, int lb, double maxd, double *out7) {
   return guard([&] {
     World &w = world(wh);
+    sync_aabbs(w);
     Object &a = w.obj(oa, "object A");
     Object &b = w.obj(ob, "object B");
     check_link(a, la);
@@ -239,6 +243,7 @@ int cn_ignore_pair(int wh, int oa, int la, int ob, int lb, int ignore) {
 int cn_ray_test(int wh, const double *from, const double *to, int n, int *hit, double *out) {
   return guard([&] {
     World &w = world(wh);
+    sync_aabbs(w);
     if (n < 0) fail(CN_E_ARG, "ray count %d, expected >= 0", n);
     if (n == 0) return 0;
     check_ptr(from, "ray start array");

@@ -99,7 +99,7 @@ btRigidBody *new_body(World &w, Object &o, const ShapeP &s, double mass, const b
   return rb;
 }
 
-void teleport_rb(World &w, btRigidBody *rb, const btTransform &t) {
+static inline void teleport_to(World &w, btRigidBody *rb, const btTransform &t) {
   rb->setWorldTransform(t);
   rb->setInterpolationWorldTransform(t);
   if (rb->isStaticOrKinematicObject()) {
@@ -108,7 +108,27 @@ void teleport_rb(World &w, btRigidBody *rb, const btTransform &t) {
   } else {
     rb->activate(true);
   }
-  w.dw->updateSingleAabb(rb);
+  if (rb->getUserIndex3() != 1) {
+    rb->setUserIndex3(1);
+    w.stale_aabbs.push_back(rb);
+  }
+}
+
+void teleport_rb(World &w, btRigidBody *rb, const btTransform &t) { teleport_to(w, rb, t); }
+
+bool teleport_rb_tame(World &w, btRigidBody *rb, const double *pose) {
+  btTransform t;
+  if (!pose_into(pose, t)) return false;
+  teleport_to(w, rb, t);
+  return true;
+}
+
+void sync_aabbs(World &w) {
+  for (btCollisionObject *co : w.stale_aabbs) {
+    co->setUserIndex3(0);
+    if (co->getBroadphaseHandle()) w.dw->updateSingleAabb(co);
+  }
+  w.stale_aabbs.clear();
 }
 
 btTransform object_pose(const Object &o) {
@@ -132,6 +152,7 @@ void set_object_pose(World &w, Object &o, const btTransform &t) {
 }
 
 void remove_object_bodies(World &w, Object &o) {
+  sync_aabbs(w);  // no deleted body may stay on the list
   for_each_rb(o, [&](btRigidBody *rb, int) {
     w.dw->removeRigidBody(rb);
     delete rb;
@@ -295,8 +316,9 @@ namespace {
 struct KinematicRest {
   btDiscreteDynamicsWorld *dw;
   std::vector<btCollisionObject *> slept;
-  explicit KinematicRest(btDiscreteDynamicsWorld *d) : dw(d) {
-    dw->updateAabbs();  // bounding boxes of everything teleported since the last query
+  explicit KinematicRest(World &w) : dw(w.dw) {
+    sync_aabbs(w);
+    dw->updateAabbs();  // all bounding boxes, before the kinematic bodies stop being updated
     btCollisionObjectArray &all = dw->getCollisionObjectArray();
     for (int i = 0; i < all.size(); ++i) {
       btCollisionObject *co = all[i];
@@ -320,7 +342,7 @@ int cn_world_step(int wh, double dt) {
   return guard([&] {
     World &w = world(wh);
     check_positive(dt, "time step dt");
-    KinematicRest rest(w.dw);
+    KinematicRest rest(w);
     w.dw->stepSimulation(dt, 0, dt);
     return 0;
   });
@@ -334,7 +356,7 @@ int cn_world_simulate(int wh, double seconds, double dt) {
     double steps = std::ceil(seconds / dt - 1e-9);
     if (steps > 1e8) fail(CN_E_ARG, "simulate %g s at dt %g needs %g steps, limit 1e8", seconds, dt, steps);
     int n = (int)steps;
-    KinematicRest rest(w.dw);
+    KinematicRest rest(w);
     for (int i = 0; i < n; ++i) w.dw->stepSimulation(dt, 0, dt);
     return n;
   });
@@ -411,13 +433,29 @@ int cn_object_get_pose(int wh, int oh, double *out) {
   });
 }
 
+// A body carrying no rigid attachment, teleported to a tame pose, runs without FpMasked: the
+// call only normalises the quaternion and copies transforms (bounding boxes are deferred).
+static bool carries_attachments(const World &w, int oh) {
+  for (const Attachment &a : w.attachments)
+    if (a.parent == oh && !a.loose) return true;
+  return false;
+}
+
 int cn_object_set_pose(int wh, int oh, const double *pose) {
-  return guard([&] {
+  auto body = [&] {
     World &w = world(wh);
     Object &o = w.obj(oh);
     set_object_pose(w, o, read_pose(pose));
     return 0;
+  };
+  if (!fp_tame(pose, 7)) return guard(body);
+  int r = guard_unmasked([&] {
+    World &w = world(wh);
+    Object &o = w.obj(oh);
+    if (o.kind != CN_BODY || carries_attachments(w, oh)) return 1;  // needs the masked path
+    return teleport_rb_tame(w, o.rb, pose) ? 0 : 1;  // a zero quaternion fails on that path
   });
+  return r == 1 ? guard(body) : r;
 }
 
 int cn_object_get_poses(int wh, const int *objs, int n, double *out) {

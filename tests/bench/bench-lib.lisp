@@ -15,24 +15,28 @@
   (multiple-value-bind (s us) (sb-ext:get-time-of-day)
     (+ s (* us 1d-6))))
 
-(defun median-seconds (thunk &key (runs 7) (warmup 1))
-  "Call THUNK WARMUP times, then RUNS times; return the median wall time of one call in seconds."
+(defun median-seconds (thunk &key (runs 7) (warmup 1) best)
+  "Call THUNK WARMUP times, then RUNS times; return the median (BEST true: the smallest) wall
+time of one call in seconds."
   (loop repeat warmup do (funcall thunk))
   (let ((times (loop repeat runs
                      collect (let ((start (now-seconds)))
                                (funcall thunk)
                                (- (now-seconds) start)))))
-    (nth (floor runs 2) (sort times #'<))))
+    (if best
+        (reduce #'min times)
+        (nth (floor runs 2) (sort times #'<)))))
 
-(defun time-per-call (thunk &key (min-seconds 0.2d0) (runs 5))
-  "Median over RUNS batches of the time of one call of THUNK in seconds; each batch repeats THUNK
-until it has taken at least MIN-SECONDS."
+(defun time-per-call (thunk &key (min-seconds 0.2d0) (runs 5) best)
+  "Median (BEST true: the fastest) over RUNS batches of the time of one call of THUNK in
+seconds; each batch repeats THUNK until it has taken at least MIN-SECONDS."
   (let ((n 1))
     ;; find a batch size that takes at least MIN-SECONDS
     (loop for dt = (median-seconds (lambda () (dotimes (i n) (funcall thunk))) :runs 1 :warmup 0)
           while (< dt min-seconds)
           do (setf n (* n (max 2 (min 10 (ceiling (* 1.2 min-seconds) (max dt 1d-6)))))))
-    (/ (median-seconds (lambda () (dotimes (i n) (funcall thunk))) :runs runs :warmup 0) n)))
+    (/ (median-seconds (lambda () (dotimes (i n) (funcall thunk))) :runs runs :warmup 0 :best best)
+       n)))
 
 (defun run-peer (program &rest args)
   "Run PROGRAM with ARGS; return its standard output as a string, or NIL when it cannot run."

@@ -1,0 +1,93 @@
+;;;; Tests of cram-native: the caller's floating point modes, the unmasked teleport path and the
+;;;; bounding boxes brought up to date at the next query.
+
+(in-package :cram-native-tests)
+(in-suite native)
+
+(defun trap-list ()
+  "The floating point traps enabled in this thread."
+  (getf (sb-int:get-floating-point-modes) :traps))
+
+(defun divide (a b)
+  "A / B at run time (the compiler does not fold it)."
+  (/ a b))
+
+(test shim-calls-keep-lisp-float-traps
+  "Every kind of call (fast teleport, masked teleport, physics, queries, rendering, IK) leaves
+SBCL's traps as they were: a division by zero still signals afterwards."
+  (let ((before (trap-list)))
+    (is (member :divide-by-zero before))
+    (with-world (w)
+      (add-plane w)
+      (let ((b (add-box w '(0 0 1 0 0 0 1) '(0.1 0.1 0.1) :mass 1))
+            (r (add-urdf w *arm-urdf* :pose '(-1 0 0 0 0 0 1))))
+        (set-object-pose w b '(0 0 0.5 0 0 0 1))
+        (is (equal before (trap-list)))
+        (set-object-pose w b '(0 0 1d150 0 0 0 1)) ; masked path
+        (is (equal before (trap-list)))
+        (set-object-pose w b '(0 0 0.5 0 0 0 1))
+        (simulate w 0.2 (/ 1d0 240))
+        (object-contacts w b)
+        (world-contacts w)
+        (ray-test w '((0 0 3)) '((0 0 -1)))
+        (set-robot-joints w r '(0 1) '(0.3 0.2))
+        (visibility w (look-at '(2 0 1) '(0 0 0.3)) b)
+        (is (equal before (trap-list)))))
+    (signals division-by-zero (divide 1d0 0d0))))
+
+(test teleport-paths-agree
+  "A tame pose (unmasked path) and poses the masked path takes (tiny or huge components, a
+body carrying an attachment) give the same normalised result."
+  (with-world (w)
+    (let ((a (add-box w '(0 0 0 0 0 0 1) '(0.1 0.1 0.1) :mass 1))
+          (b (add-box w '(0 0 0 0 0 0 1) '(0.1 0.1 0.1) :mass 1)))
+      ;; the same rotation, given once unnormalised and tame, once with a 1e-120 component
+      (set-object-pose w a '(1 2 3 0 0 2 2))
+      (set-object-pose w b '(1 2 3 1d-120 0 2 2))
+      (let ((pa (object-pose w a)) (pb (object-pose w b)))
+        (is (every (lambda (x y) (approx x y 1d-12)) pa pb))
+        (is (approx (/ (sqrt 2d0) 2) (aref pa 6) 1d-12)))
+      ;; a body carrying another moves it along (masked path)
+      (attach w b a)
+      (set-object-pose w a '(5 0 0 0 0 0 1))
+      (is (approx 5d0 (aref (object-pose w b) 0) 1d-9))
+      (detach w b)
+      (set-object-pose w a '(7 0 0 0 0 0 1))
+      (is (approx 5d0 (aref (object-pose w b) 0) 1d-9))
+      ;; a zero quaternion is refused on the fast path with its value named
+      (signals-naming ("zero quaternion") (set-object-pose w a '(0 0 0 0 0 0 0)))
+      (is (approx 7d0 (aref (object-pose w a) 0) 1d-12))
+      ;; NaN and infinite components are refused, naming them, and raise no trap on the way
+      (signals-naming ("NaN") (set-object-pose w a (list 0 (nan) 0 0 0 0 1)))
+      (signals-naming ("infinity")
+        (set-object-pose w a (list 0 0 sb-ext:double-float-positive-infinity 0 0 0 1))))))
+
+(test queries-see-teleported-bodies
+  "Bounding boxes are brought up to date at the next query: after many teleports without a
+query, contacts, rays, distances and physics see each body where it is now."
+  (with-world (w)
+    (let ((plane (add-plane w))
+          (m (add-box w '(0 0 0.1 0 0 0 1) '(0.2 0.2 0.2) :mass 1))
+          (wall (add-box w '(5 0 0.5 0 0 0 1) '(0.2 2 1))))
+      (dotimes (k 100) (set-object-pose w m (list (* 0.01 k) 3 0.1 0 0 0 1)))
+      (set-object-pose w m '(5.15 0 0.5 0 0 0 1))         ; into the wall
+      (is (find wall (object-contacts w m) :key #'third))
+      (is (null (first (first (ray-test w '((0 0 3)) '((0 0 0.3))))))) ; old place is empty
+      (is (eql m (first (first (ray-test w '((5.2 0 3)) '((5.2 0 0.45)))))))
+      (is (find-if (lambda (p) (or (and (eql (first p) m) (eql (third p) wall))
+                                   (and (eql (first p) wall) (eql (third p) m))))
+                   (world-contacts w)))
+      (set-object-pose w m '(-3 0 0.1 0 0 0 1))
+      (is (not (find wall (object-contacts w m) :key #'third)))
+      (is (< (closest-distance w m wall :max-distance 10) 8.1))
+      ;; dropped after teleports, it lands on the floor (the plane sees it)
+      (set-object-pose w m '(-3 0 1 0 0 0 1))
+      (simulate w 2 (/ 1d0 240))
+      (is (approx 0.1d0 (aref (object-pose w m) 2) 3d-3))
+      (is (find plane (object-contacts w m :threshold 1d-3) :key #'third))
+      ;; teleported, then removed before any query: the next queries run cleanly
+      (let ((n (add-box w '(9 9 0.5 0 0 0 1) '(0.2 0.2 0.2))))
+        (set-object-pose w n '(8 8 0.5 0 0 0 1))
+        (remove-object w n))
+      (is (listp (world-contacts w)))
+      (is (null (first (first (ray-test w '((8 8 3)) '((8 8 0.3))))))))))
