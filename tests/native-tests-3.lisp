@@ -91,3 +91,30 @@ query, contacts, rays, distances and physics see each body where it is now."
         (remove-object w n))
       (is (listp (world-contacts w)))
       (is (null (first (first (ray-test w '((8 8 3)) '((8 8 0.3))))))))))
+
+(test robot-contacts-agree-with-world-contacts
+  "The contacts of an articulated object (one broadphase query for all its links) are the
+pairs the whole-world collision pass finds for it: 20 seeded random scenes and arm poses."
+  (let ((state (sb-ext:seed-random-state 11)) (checked 0))
+    (dotimes (scene 20)
+      (with-world (w)
+        (let ((r (add-urdf w *arm-urdf*)))
+          (dotimes (k 25)
+            (add-sphere w (list (- (random 1.4d0 state) 0.7d0) (- (random 1.4d0 state) 0.7d0)
+                                (random 1.2d0 state) 0 0 0 1)
+                        (+ 0.03d0 (random 0.08d0 state))))
+          (set-robot-joints w r '(0 1) (list (- (random 6d0 state) 3d0) (- (random 4d0 state) 2d0)))
+          (flet ((with-r (pairs limit)
+                   ;; (link other) of the pairs with r closer than LIMIT
+                   (loop for (a la b lb d) in pairs
+                         when (and (< d limit) (or (eql a r) (eql b r)) (not (eql a b)))
+                           collect (if (eql a r) (list la b) (list lb a)))))
+            (let ((ours (object-contacts w r :threshold 1d-3))
+                  (all (world-contacts w :threshold 1d-3)))
+              ;; every clearly penetrating pair of one is a contact of the other
+              (dolist (p (with-r all -2d-3))
+                (incf checked)
+                (is (member p (with-r ours 2d-3) :test #'equal)))
+              (dolist (p (with-r ours -2d-3))
+                (is (member p (with-r all 2d-3) :test #'equal))))))))
+    (is (> checked 5) "only ~d penetrating pairs over all scenes" checked)))

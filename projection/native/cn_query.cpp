@@ -90,6 +90,39 @@ struct PairDistance : btCollisionWorld::ContactResultCallback {
   }
 };
 
+// Contacts of every link of the articulated object O with other objects: what contactTest of
+// each link finds, from one broadphase query of the union of the links' boxes (instead of one
+// tree query per link, most of whose hits would be the object's own links).
+static void articulated_contacts(World &w, const Object &o, double threshold, PairList &pairs) {
+  btVector3 lo, hi;
+  if (!union_aabb(o, -1, lo, hi)) return;
+  struct Others : btBroadphaseAabbCallback {
+    int self;
+    std::vector<btBroadphaseProxy *> found;
+    bool process(const btBroadphaseProxy *p) override {
+      auto *co = static_cast<const btCollisionObject *>(p->m_clientObject);
+      if (co->getUserIndex() != self) found.push_back(const_cast<btBroadphaseProxy *>(p));
+      return true;
+    }
+  } others;
+  others.self = o.id;
+  w.dw->getBroadphase()->aabbTest(lo, hi, others);
+  if (others.found.empty()) return;
+  for (size_t l = 0; l < o.link_rb.size(); ++l) {
+    btRigidBody *rb = o.link_rb[l];
+    if (!rb) continue;
+    auto *bp = rb->getBroadphaseHandle();
+    ObjectContacts cb(w, o.id, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
+    btVector3 a, b;
+    rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
+    for (btBroadphaseProxy *p : others.found) {
+      if (!TestAabbAgainstAabb2(a, b, p->m_aabbMin, p->m_aabbMax)) continue;
+      if (!cb.needsCollision(p)) continue;
+      w.dw->contactPairTest(rb, static_cast<btCollisionObject *>(p->m_clientObject), cb);
+    }
+  }
+}
+
 static void check_link(const Object &o, int link) {
   if (o.kind == CN_BODY && link != -1)
     fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, o.id);
@@ -169,11 +202,13 @@ int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
     PairList pairs;
-    for_each_rb(o, [&](btRigidBody *rb, int) {
-      auto *bp = rb->getBroadphaseHandle();
+    if (o.kind == CN_BODY) {
+      auto *bp = o.rb->getBroadphaseHandle();
       ObjectContacts cb(w, oh, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
-      w.dw->contactTest(rb, cb);
-    });
+      w.dw->contactTest(o.rb, cb);
+    } else {
+      articulated_contacts(w, o, threshold, pairs);
+    }
     if (o.kind == CN_ARTICULATED && o.self_collision) {
       for (size_t i = 0; i < o.link_rb.size(); ++i)
         for (size_t j = i + 1; j < o.link_rb.size(); ++j) {
