@@ -14,7 +14,7 @@
 (defcn "cn_detach" :int (w :int) (o :int) (p :int))
 (defcn "cn_attachments" :int (w :int) (out :pointer) (cap :int))
 
-(defvar *pair-capacity* 256 "Smallest heap capacity of the contact pair buffers when 32 pairs do not suffice.")
+(defvar *pair-capacity* 256 "Smallest heap capacity of the contact pair buffers when 8 pairs do not suffice.")
 
 (defun %pairs-list (iv dv n)
   (loop for i below n
@@ -25,11 +25,11 @@
 (defun %collect-pairs (fn)
   "Call FN with (ints doubles cap) until the buffers are large enough; return a list of
 (obj-a link-a obj-b link-b distance).  The first try uses buffers on the stack."
-  (let ((iv (make-array (* 4 32) :element-type '(signed-byte 32)))
-        (dv (make-array 32 :element-type 'double-float)))
+  (let ((iv (make-array (* 4 8) :element-type '(signed-byte 32)))
+        (dv (make-array 8 :element-type 'double-float)))
     (declare (dynamic-extent iv dv))
-    (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd 32))))
-      (if (<= n 32)
+    (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd 8))))
+      (if (<= n 8)
           (%pairs-list iv dv n)
           (let ((cap (max n *pair-capacity*)))
             (loop
