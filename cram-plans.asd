@@ -1,12 +1,17 @@
 ;;;; cram-plans: one system per layer; `cram-plans' loads them all.
 ;;;; Each layer's files are listed in its own DEFSYSTEM form below.
 
-;; Debian's cxml.asd defines several primary systems in one file, which makes ASDF warn
-;; on every load; load it once here with those warnings muffled (not again when ASDF re-reads
-;; this file).
+;; Debian's cxml.asd defines several primary systems in one file: ASDF 3.3 re-reads it, warns
+;; and prints closure-common's character checks each time one of them is looked up.  Load cxml
+;; once, quietly, and register it and its parts as immutable, so ASDF neither re-reads nor
+;; re-plans them (nor recompiles what depends on them).
 (unless (asdf:component-loaded-p "cxml")
-  (handler-bind ((warning #'muffle-warning))
-    (asdf:load-system "cxml")))
+  (let ((*standard-output* (make-broadcast-stream)))
+    (handler-bind ((warning #'muffle-warning))
+      (asdf:load-system "cxml")))
+  (dolist (name '("cxml" "cxml-xml" "cxml-dom" "cxml-klacks" "closure-common"))
+    (when (asdf:find-system name nil)
+      (asdf:register-immutable-system name))))
 
 (defsystem "cram-plans/cram-utilities"
   :description "Lazy lists, variable bindings and small utilities (package CUT)."
@@ -318,7 +323,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "scripts-tests")))
 
 (defsystem "cram-plans/tests/ros"
-  :depends-on ("cram-plans/tests/base" "cram-plans/roslisp-utilities" "cram-plans/roslisp-utilities/ros" "sb-posix")
+  :depends-on ("cram-plans/tests/base" "cram-plans/roslisp-utilities" "cram-plans/roslisp-utilities/ros"
+               "cram-plans/ros-load" "sb-posix")
   :pathname "tests/"
   :serial t
   :components ((:file "ros-tests")
@@ -379,6 +385,7 @@ grasps, gripper openings and efforts, pick and place trajectories."
 
 (defsystem "cram-plans/ros-load"
   :description "ROS-LOAD:LOAD-SYSTEM, mapping ROS package names to this project's systems."
+  :depends-on ("ros-load-manifest")  ; roslisp's loader first, so that this one wraps it
   :pathname "src/tutorials/"
   :components ((:file "ros-load")))
 

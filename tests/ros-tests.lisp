@@ -299,3 +299,17 @@ unset), restoring the previous values afterwards."
   (with-env (("ROS_HOME" nil))
     (is (equal (merge-pathnames ".ros/" (user-homedir-pathname))
                (roslisp-utilities:ros-home-directory)))))
+
+(test ros-load-with-roslisp-loaded
+  "ROS-LOAD:LOAD-SYSTEM resolves this project's ROS packages also when roslisp's own loader
+(whose ASDF search calls rospack) is loaded, and hands other packages to that loader, whose
+error names the package."
+  (is (fboundp 'ros-load-manifest::asdf-ros-search))
+  (is (string= "cram-plans/cram-pepper-description"
+               (ros-load:load-system "cram_pepper_description")))
+  (is (string= "cram-plans/cram-pepper-description"
+               (ros-load:load-system "cram_pepper_description" :cram-pepper-description)))
+  (let ((e (handler-case (progn (ros-load:load-system "no_such_ros_pkg") nil)
+             (error (e) e))))
+    (is (typep e 'error))
+    (is (search "no_such_ros_pkg" (princ-to-string e)))))

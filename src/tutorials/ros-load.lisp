@@ -34,21 +34,36 @@
   (or (cdr (assoc ros-package *ros-package-systems* :test #'string=))
       (substitute #\- #\_ (string-downcase ros-package))))
 
-(unless (fboundp 'load-system)
-  (defun load-system (ros-package &optional system force)
-    "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
-the one ROS-PACKAGE maps to. FORCE recompiles. Returns the system's name."
-    (let ((name (cond ((null system) (ros-package-system-name ros-package))
-                      ((symbolp system) (string-downcase (symbol-name system)))
-                      ((stringp system) system)
-                      (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system))))
-          (*current-ros-package* ros-package))
-      (ros-package-system-name ros-package)
-      ;; this project's systems live in cram-plans.asd as cram-plans/NAME
-      (unless (asdf:find-system name nil)
-        (let ((ours (concatenate 'string "cram-plans/" name)))
-          (when (asdf:find-system ours nil) (setf name ours))))
-      (unless (asdf:find-system name nil)
-        (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s." name ros-package))
-      (asdf:load-system name :force force)
-      name)))
+(defvar *roslisp-load-system*
+  (and (fboundp 'load-system) (not (get 'load-system 'cram-plans)) (fdefinition 'load-system))
+  "roslisp's own LOAD-SYSTEM (it finds packages with rospack), kept for the ROS packages this
+project does not provide; NIL when roslisp's loader is not loaded.")
+
+(defun cram-plans-load-system (ros-package &optional system force)
+  "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
+the one ROS-PACKAGE maps to. FORCE recompiles. Returns the system's name. A package this project
+does not provide is handed to roslisp's loader when it is loaded."
+  (let ((name (cond ((null system) (ros-package-system-name ros-package))
+                    ((symbolp system) (string-downcase (symbol-name system)))
+                    ((stringp system) system)
+                    (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system)))))
+    (ros-package-system-name ros-package)
+    ;; this project's systems live in cram-plans.asd as cram-plans/NAME; look them up and load
+    ;; them with no current ROS package, so that roslisp's search (rospack) stays out of it
+    (let ((*current-ros-package* nil))
+      (let ((ours (concatenate 'string "cram-plans/" name)))
+        (cond ((asdf:find-system ours nil) (setf name ours))
+              ((not (asdf:find-system name nil)) (setf name nil)))))
+    (cond (name
+           (asdf:load-system name :force force)
+           name)
+          (*roslisp-load-system*
+           (funcall *roslisp-load-system* ros-package (or system ros-package) force))
+          (t
+           (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s."
+                  (or system (ros-package-system-name ros-package)) ros-package)))))
+
+;; ROS-LOAD:LOAD-SYSTEM is this project's loader, whichever was loaded first
+(setf (fdefinition 'load-system) #'cram-plans-load-system
+      (documentation 'load-system 'function) (documentation 'cram-plans-load-system 'function)
+      (get 'load-system 'cram-plans) t)
