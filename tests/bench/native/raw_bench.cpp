@@ -151,26 +151,20 @@ int main() {
     for (int j = 0; j < NJ; ++j) r.q[j] = 0.01 * ((i + j) % 20);
     fk(w, r, out.data());
   }, 20000);
-  double t_col = per_call([&](int) {
+  auto robot_contacts = [&] {  // contacts of every link with the world, own links left out
     Count c;
     c.self = 1;
-    for (auto *b : r.bodies) {
-      c.m_collisionFilterGroup = 32;
-      c.m_collisionFilterMask = -1;
-      w.dw->contactTest(b, c);
-    }
-  }, 5000);
+    c.m_collisionFilterGroup = 32;
+    c.m_collisionFilterMask = -1;
+    for (auto *b : r.bodies) w.dw->contactTest(b, c);
+    return c.n;
+  };
+  double t_col = per_call([&](int) { robot_contacts(); }, 5000);
   // new joint values, then the collision check of every link: the cycle of a motion check
   double t_fkcol = per_call([&](int i) {
     for (int j = 0; j < NJ; ++j) r.q[j] = 0.01 * ((i + j) % 20);
     fk(w, r, out.data());
-    Count c;
-    c.self = 1;
-    for (auto *b : r.bodies) {
-      c.m_collisionFilterGroup = 32;
-      c.m_collisionFilterMask = -1;
-      w.dw->contactTest(b, c);
-    }
+    robot_contacts();
   }, 5000);
   double t_copy = per_call([&](int) {
     World c;
