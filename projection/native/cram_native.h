@@ -18,7 +18,14 @@
  *     articulated object".
  *   - Out arrays are caller-owned.  Functions filling a variable number of records take a
  *     capacity (in records) and return the total number available; at most `cap` are written.
- *   - One world must not be used by two threads at the same time; different worlds may be.
+ *   - Calls may come from any thread: every entry point runs under one process-wide lock.
+ *   - The caller's floating point environment is kept: a call that computes masks every
+ *     exception while it runs and restores the caller's control word, so a host that traps
+ *     (SBCL: invalid, overflow, division by zero) never sees a trap from inside the library.
+ *     Teleporting a body that carries no attachment to a pose of moderate magnitudes only
+ *     normalises and copies, and skips that masking.
+ *   - Moving bodies (teleports, joint values) leaves their broadphase bounding boxes to be
+ *     brought up to date once, at the next contact, distance, ray or physics call.
  */
 #ifndef CRAM_NATIVE_H
 #define CRAM_NATIVE_H
