@@ -107,4 +107,6 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
     (finish-output)
     (uiop:quit (if (getf result :success) 0 1))))
 
-(load (merge-pathnames "runner.lisp" *tools-directory*))
+;; one compilation unit: runner.lisp calls functions it defines further down
+(with-compilation-unit ()
+  (load (merge-pathnames "runner.lisp" *tools-directory*)))
