@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <cstring>
 #include <cstdlib>
+#include <sched.h>
 #include <sys/stat.h>
+#include <time.h>
 
 namespace cn {
 
@@ -125,9 +127,25 @@ std::string check_str(const char *s, const char *what) {
   return std::string(s);
 }
 
-std::recursive_mutex &api_mutex() {
-  static std::recursive_mutex m;
-  return m;
+std::atomic<int> g_api_lock{0};
+thread_local int t_api_depth = 0;
+
+void api_lock_wait() {
+  for (int i = 0;; ++i) {
+    if (g_api_lock.load(std::memory_order_relaxed) == 0 &&
+        !g_api_lock.exchange(1, std::memory_order_acquire))
+      return;
+    if (i < 64) {
+#if defined(__x86_64__) || defined(__i386__)
+      _mm_pause();
+#endif
+    } else if (i < 256) {
+      sched_yield();
+    } else {
+      struct timespec ts = {0, 20000};  // 20 us
+      nanosleep(&ts, nullptr);
+    }
+  }
 }
 
 // ---- world registry: handle = generation << 14 | slot -----------------------------------------
@@ -311,12 +329,12 @@ int cn_resolve_path(const char *uri, const char *base_dir, char *out, int cap) {
 
 int cn_world_alive(int w) {
   FpMasked fp;
-  std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
+  cn::ApiLock lock;
   return world_ok(w) ? 1 : 0;
 }
 int cn_world_count(void) {
   FpMasked fp;
-  std::lock_guard<std::recursive_mutex> lock(cn::api_mutex());
+  cn::ApiLock lock;
   return g_live;
 }
 

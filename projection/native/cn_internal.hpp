@@ -5,6 +5,7 @@
 #include <btBulletDynamicsCommon.h>
 #include <cmath>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -38,7 +39,22 @@ int guard_exception();  // call inside catch(...): converts the active exception
 // Every entry point runs under one process-wide lock: Lisp may call in from several threads at
 // once (plan threads of one projection, the garbage collector's finalizer destroying a world),
 // and worlds share collision shapes, meshes and the registries.
-std::recursive_mutex &api_mutex();
+// The lock is recursive per thread (a depth counter in thread-local storage); taking it costs
+// one atomic exchange and giving it back one plain store. A waiter spins briefly, then yields,
+// then sleeps in short steps (the holder may be rendering for milliseconds).
+extern std::atomic<int> g_api_lock;
+extern thread_local int t_api_depth;
+void api_lock_wait();
+struct ApiLock {
+  ApiLock() {
+    if (t_api_depth++ == 0 && g_api_lock.exchange(1, std::memory_order_acquire)) api_lock_wait();
+  }
+  ~ApiLock() {
+    if (--t_api_depth == 0) g_api_lock.store(0, std::memory_order_release);
+  }
+  ApiLock(const ApiLock &) = delete;
+  ApiLock &operator=(const ApiLock &) = delete;
+};
 
 // The caller's floating point environment (SBCL traps on invalid, overflow and division by
 // zero) is replaced by "all exceptions masked" for the duration of a call and restored, flags
@@ -60,7 +76,7 @@ struct FpMasked {
 
 // The lock and the exception barrier, without touching the floating point environment.
 template <class F> inline int guard_unmasked(F &&f) {
-  std::lock_guard<std::recursive_mutex> lock(api_mutex());
+  ApiLock lock;
   try {
     return f();
   } catch (...) {

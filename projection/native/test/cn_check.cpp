@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <atomic>
+#include <thread>
 #include <vector>
 #include <xmmintrin.h>
 
@@ -114,6 +116,37 @@ int main() {
     CHECK(cn_object_set_pose(w, box, p0) == 0);
     CHECK((_mm_getcsr() & ~0x3Fu) == (mine & ~0x3Fu));  // control bits back; flags may differ
     _mm_setcsr(csr);
+  }
+
+  // four threads share one world and create their own: the API lock serialises them
+  {
+    int shared = cn_world_create(0, 0, -9.81);
+    int bodies[4];
+    for (int t = 0; t < 4; ++t) {
+      double bp[7] = {double(t), 0, 0.5, 0, 0, 0, 1};
+      bodies[t] = cn_body_add_box(shared, bp, 0.1, 0.1, 0.1, 1);
+    }
+    std::atomic<int> errors{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+      threads.emplace_back([&, t] {
+        int pr[64];
+        double dd[16];
+        for (int i = 0; i < 2000; ++i) {
+          double q[7] = {double(t), 0.001 * (i % 7), 0.5, 0, 0, 0, 1};
+          if (cn_object_set_pose(shared, bodies[t], q) != 0) ++errors;
+          if (cn_object_contacts(shared, bodies[t], 0, pr, dd, 16) < 0) ++errors;
+          if (i % 200 == 0) {
+            int own = cn_world_create(0, 0, -9.81);
+            if (own < 0 || cn_world_destroy(own) != 0) ++errors;
+          }
+        }
+      });
+    for (auto &th : threads) th.join();
+    CHECK(errors == 0);
+    double got[7];
+    CHECK(cn_object_get_pose(shared, bodies[2], got) == 0 && got[0] == 2);
+    CHECK(cn_world_destroy(shared) == 0);
   }
 
   // rendering and visibility
