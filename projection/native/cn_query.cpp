@@ -15,6 +15,14 @@ static PairKey make_key(int oa, int la, int ob, int lb) {
 // Contact pairs as collected: one entry per contact point, merged by write_pairs.
 using PairList = std::vector<std::pair<PairKey, double>>;
 
+// The pair list of the running query, reused (queries run one at a time under the API lock
+// and never nest), so that a query allocates nothing once it has run.
+static PairList &scratch_pairs() {
+  static PairList pairs;
+  pairs.clear();
+  return pairs;
+}
+
 // Sort PAIRS by key, keep the smallest distance of each pair, write up to CAP of them; return
 // how many distinct pairs there are.
 static int write_pairs(PairList &pairs, int *out4, double *dist, int cap) {
@@ -176,7 +184,7 @@ int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap
       throw;
     }
     set_query_all(w, false);
-    PairList pairs;
+    PairList &pairs = scratch_pairs();
     btDispatcher *d = w.dw->getDispatcher();
     for (int i = 0; i < d->getNumManifolds(); ++i) {
       btPersistentManifold *m = d->getManifoldByIndexInternal(i);
@@ -201,7 +209,7 @@ int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist
     Object &o = w.obj(oh);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
-    PairList pairs;
+    PairList &pairs = scratch_pairs();
     if (o.kind == CN_BODY) {
       auto *bp = o.rb->getBroadphaseHandle();
       ObjectContacts cb(w, oh, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
