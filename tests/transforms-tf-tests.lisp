@@ -210,6 +210,43 @@
     (is (close-transform-p (lookup-transform tf "map" "base_footprint")
                            (list 1 (+ 2 (1- n)) 0) 90 1d-9))))
 
+(test tf-batch-updates-are-seen-whole
+  ;; a writer moves odom_combined and base_footprint together, as one batch, so that the base
+  ;; stays at (1 2 0) in the map; a reader in another thread must never see half a batch
+  (let* ((tf (let ((tf (make-test-tree)))
+               (cl-tf:set-transform tf (make-transform-stamped
+                                        "odom_combined" "base_footprint" 0
+                                        (make-3d-vector 0 0 0) (make-identity-rotation)))
+               tf))
+         (n 2000)
+         (reading nil)
+         (writer (bt:make-thread
+                  (lambda ()
+                    (loop until reading do (bt:thread-yield))
+                    (dotimes (i n)
+                      (cl-tf:with-transforms-batch (tf)
+                        ;; odom at (1, 2 + i) in map (yaw 90); base at (-i, 0) in odom: x of odom
+                        ;; points along y of the map, so the base stays at (1 2 0)
+                        (cl-tf:set-transform tf (make-transform-stamped
+                                                 "map" "odom_combined" i
+                                                 (make-3d-vector 1 (+ 2 i) 0) (q-yaw 90)))
+                        (bt:thread-yield)
+                        (cl-tf:set-transform tf (make-transform-stamped
+                                                 "odom_combined" "base_footprint" i
+                                                 (make-3d-vector (- i) 0 0)
+                                                 (make-identity-rotation))))))
+                  :name "tf batch writer"))
+         (bad 0) (looked 0))
+    (setf reading t)
+    (loop do (let ((tr (lookup-transform tf "map" "base_footprint")))
+               (incf looked)
+               (unless (close-transform-p tr (list 1 2 0) 90 1d-6)
+                 (incf bad)))
+          while (bt:thread-alive-p writer))
+    (bt:join-thread writer)
+    (is (plusp looked))
+    (is (zerop bad) "~d of ~d lookups saw half a batch" bad looked)))
+
 ;;; Stamped objects
 
 (test stamped-constructors-and-copies

@@ -49,7 +49,7 @@ and COMMON-DESIG:WAIT-PM."
      (cram-tf:*robot-right-tool-frame* (arm-tool-frame :right cram-tf:*robot-right-tool-frame*))
      (desig:*default-role* :projection-role)
      (*tf-from-belief-state* t)
-     (*environment-tf-signatures* (make-hash-table :test 'eq))
+     (*environment-tf-signatures* (make-hash-table :test 'eq :synchronized t))
      (*ik-random-state* (sb-ext:seed-random-state *ik-random-seed*)))
     :process-module-definitions (urdf-proj-navigation urdf-proj-torso urdf-proj-neck
                                  urdf-proj-perception urdf-proj-grippers urdf-proj-arms

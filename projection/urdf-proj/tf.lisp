@@ -74,11 +74,22 @@ with the map) and every link under its parent link. Links named in the hash tabl
                (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr:object-handle object))
                (btr::pose->vector (btr:pose object))))
 
+(defvar *motion-lock* (sb-thread:make-mutex :name "projection motion")
+  "Held while a motion of the simulated robot runs, its TF update included: motions of
+concurrent plan branches (CPL:PAR) change the belief state one after the other, and none sees
+another half done.")
+
 (defun update-tf-from-belief-state (&key (transformer cram-tf:*transformer*)
                                          (world btr:*current-bullet-world*) force)
   "Write the robot of WORLD into TRANSFORMER: map → odom frame (identity) → the robot's root
 link → each link, and the links of the other articulated objects (the environment) under map,
-those whose state changed since the last call (all with FORCE). Returns TRANSFORMER."
+those whose state changed since the last call (all with FORCE), as one update that lookups see
+whole or not at all. Returns TRANSFORMER."
+  (sb-thread:with-recursive-lock (*motion-lock*)
+    (cl-transforms-stamped:with-transforms-batch (transformer)
+      (%update-tf-from-belief-state transformer world force))))
+
+(defun %update-tf-from-belief-state (transformer world force)
   (let* ((robot (robot-object world))
          (stamp (cram-tf-stamp))
          (odom (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
@@ -111,7 +122,8 @@ a snapshot labelled LABEL, and the ROBOT-STATE-CHANGED event."
   (coe:on-event (make-instance 'cpoe:robot-state-changed)))
 
 (defmacro with-motion ((label) &body body)
-  "Run BODY as the motion LABEL (a string): AFTER-MOTION runs when BODY is left, normally or
-by a failure."
-  `(unwind-protect (progn ,@body)
-     (after-motion ,label)))
+  "Run BODY as the motion LABEL (a string), holding *MOTION-LOCK*: AFTER-MOTION runs when BODY
+is left, normally or by a failure."
+  `(sb-thread:with-recursive-lock (*motion-lock*)
+     (unwind-protect (progn ,@body)
+       (after-motion ,label))))

@@ -99,7 +99,7 @@ the frame tree signals TF-CONNECTIVITY-ERROR. Returns TRANSFORM."
     (when (string= parent-name child-name)
       (cl-transforms::input-error transform "a transform between two different frames"
                                   'set-transform))
-    (bt:with-lock-held ((transformer-lock transformer))
+    (sb-thread:with-recursive-lock ((transformer-lock transformer))
       (let ((parent (%intern-frame frames parent-name))
             (child (%intern-frame frames child-name)))
         ;; the new link must not make CHILD an ancestor of itself
@@ -199,7 +199,7 @@ TRANSFORM-STAMPED-ERROR otherwise."
          (timeout (%timeout timeout place))
          (lock (transformer-lock transformer))
          (deadline nil))
-    (bt:with-lock-held (lock)
+    (sb-thread:with-recursive-lock (lock)
       (loop
         (multiple-value-bind (result stamp-or-class description)
             (%try-lookup transformer target source)
@@ -273,24 +273,30 @@ Errors as for LOOKUP-TRANSFORM."
     (let ((p (transform-point tr point)))
       (%make-point-stamped target (%pts-stamp point) (x p) (y p) (z p)))))
 
+(defmacro with-transforms-batch ((transformer) &body body)
+  "Run BODY, which sets transforms of TRANSFORMER, as one update: a lookup in another thread sees
+all of BODY's transforms or none of them. Returns the values of BODY."
+  `(sb-thread:with-recursive-lock ((transformer-lock ,transformer))
+     ,@body))
+
 (defun frame-exists (transformer frame)
   "True when FRAME has appeared in a transform given to TRANSFORMER."
   (%check-transformer transformer 'frame-exists)
   (let ((name (%frame-name frame 'frame-exists)))
-    (bt:with-lock-held ((transformer-lock transformer))
+    (sb-thread:with-recursive-lock ((transformer-lock transformer))
       (values (gethash name (transformer-frames transformer))))))
 
 (defun known-frames (transformer)
   "The names of every frame TRANSFORMER knows, sorted."
   (%check-transformer transformer 'known-frames)
-  (bt:with-lock-held ((transformer-lock transformer))
+  (sb-thread:with-recursive-lock ((transformer-lock transformer))
     (sort (alexandria:hash-table-keys (transformer-frames transformer)) #'string<)))
 
 (defun clear (transformer &key static)
   "Forget every transform that was not set as static (all of them when STATIC is true), and the
 frames no remaining transform mentions. Returns TRANSFORMER."
   (%check-transformer transformer 'clear)
-  (bt:with-lock-held ((transformer-lock transformer))
+  (sb-thread:with-recursive-lock ((transformer-lock transformer))
     (let ((frames (transformer-frames transformer))
           (used (make-hash-table :test 'eq)))
       (loop for frame being the hash-values of frames
