@@ -240,6 +240,7 @@ edges and markers. STARTUP-ROS loads roslisp-utilities/ros (roslisp) when it is 
   :description "The roslisp part of roslisp-utilities (Debian's roslisp and message systems):
 the node, parameters, publishing the belief state on /tf and /visualization_marker_array."
   :depends-on ("cram-plans/roslisp-utilities" "cram-plans/roslisp-utilities/ros-home" "sb-posix"
+               "cram-plans/ros-load"
                "roslisp" "std_msgs-msg" "geometry_msgs-msg" "tf2_msgs-msg" "visualization_msgs-msg")
   :pathname "src/ros/"
   :serial t
@@ -385,7 +386,6 @@ grasps, gripper openings and efforts, pick and place trajectories."
 
 (defsystem "cram-plans/ros-load"
   :description "ROS-LOAD:LOAD-SYSTEM, mapping ROS package names to this project's systems."
-  :depends-on ("ros-load-manifest")  ; roslisp's loader first, so that this one wraps it
   :pathname "src/tutorials/"
   :components ((:file "ros-load")))
 

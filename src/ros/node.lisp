@@ -3,6 +3,9 @@
 
 (in-package :roslisp-utilities)
 
+;; roslisp has just (re)defined ROS-LOAD:LOAD-SYSTEM; this project's loader wraps it again
+(ros-load-manifest::install-cram-plans-load-system)
+
 (defun roslisp-log (level text)
   "Log TEXT at LEVEL through roslisp's macros (stdout, and /rosout while a node runs)."
   (ecase level

@@ -34,8 +34,7 @@
   (or (cdr (assoc ros-package *ros-package-systems* :test #'string=))
       (substitute #\- #\_ (string-downcase ros-package))))
 
-(defvar *roslisp-load-system*
-  (and (fboundp 'load-system) (not (get 'load-system 'cram-plans)) (fdefinition 'load-system))
+(defvar *roslisp-load-system* nil
   "roslisp's own LOAD-SYSTEM (it finds packages with rospack), kept for the ROS packages this
 project does not provide; NIL when roslisp's loader is not loaded.")
 
@@ -63,7 +62,15 @@ does not provide is handed to roslisp's loader when it is loaded."
            (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s."
                   (or system (ros-package-system-name ros-package)) ros-package)))))
 
-;; ROS-LOAD:LOAD-SYSTEM is this project's loader, whichever was loaded first
-(setf (fdefinition 'load-system) #'cram-plans-load-system
-      (documentation 'load-system 'function) (documentation 'cram-plans-load-system 'function)
-      (get 'load-system 'cram-plans) t)
+(defun install-cram-plans-load-system ()
+  "Make ROS-LOAD:LOAD-SYSTEM this project's loader, keeping roslisp's when it was defined (roslisp
+defines the same function when it loads: STARTUP-ROS calls this again after loading roslisp)."
+  (let ((current (and (fboundp 'load-system) (fdefinition 'load-system))))
+    (unless (and current
+                 (eq (nth-value 2 (function-lambda-expression current)) 'cram-plans-load-system))
+      (when current (setf *roslisp-load-system* current))
+      (setf (fdefinition 'load-system) #'cram-plans-load-system
+            (documentation 'load-system 'function) (documentation 'cram-plans-load-system 'function))))
+  'load-system)
+
+(install-cram-plans-load-system)
