@@ -25,19 +25,20 @@
 (defun %collect-pairs (fn)
   "Call FN with (ints doubles cap) until the buffers are large enough; return a list of
 (obj-a link-a obj-b link-b distance).  The first try uses buffers on the stack."
-  (let ((iv (make-array (* 4 8) :element-type '(signed-byte 32)))
-        (dv (make-array 8 :element-type 'double-float)))
-    (declare (dynamic-extent iv dv))
-    (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd 8))))
-      (if (<= n 8)
-          (%pairs-list iv dv n)
-          (let ((cap (max n *pair-capacity*)))
-            (loop
-              (let ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
-                    (dv (make-dvec cap)))
-                (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
-                  (when (<= n cap) (return (%pairs-list iv dv n)))
-                  (setf cap n)))))))))
+  (flet ((try (iv dv cap)
+           (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
+             (values (and (<= n cap) (%pairs-list iv dv n)) n))))
+    (let ((iv (make-array (* 4 8) :element-type '(signed-byte 32)))
+          (dv (make-array 8 :element-type 'double-float)))
+      (declare (dynamic-extent iv dv))
+      (multiple-value-bind (pairs n) (try iv dv 8)
+        (if (<= n 8)
+            pairs
+            (loop for cap = (max n *pair-capacity*) then n
+                  do (multiple-value-bind (pairs m)
+                         (try (make-array (* 4 cap) :element-type '(signed-byte 32)) (make-dvec cap) cap)
+                       (when (<= m cap) (return pairs))
+                       (setf n m))))))))
 
 (defun world-contacts (world &key (threshold 0d0))
   "Every pair of objects of WORLD whose closest distance is <= THRESHOLD (0: touching or

@@ -69,11 +69,11 @@ attachments and collision filters as WORLD; collision shapes are shared."
 (defun world-alive-p (world)
   "True if WORLD is the handle of a live world."
   (and (typep world '(signed-byte 32))
-       (= 1 (sb-sys:without-interrupts (%cn-world-alive world)))))
+       (= 1 (ccall "cn_world_alive" world))))
 
 (defun world-count ()
   "Number of live worlds."
-  (sb-sys:without-interrupts (%cn-world-count)))
+  (ccall "cn_world_count"))
 
 (defmacro with-world ((var &rest args) &body body)
   "Bind VAR to a new world (MAKE-WORLD ARGS), run BODY, destroy the world afterwards."

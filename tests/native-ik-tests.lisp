@@ -79,6 +79,18 @@ a list of problems (answers off the target, outside the limits, or with wrong re
           (is (null q))
           (is (> (aref err 0) 0.5d0)))))))
 
+(defun check-chain-round-trips (w r base joints seed)
+  "The chain BASE -> r_gripper_tool_frame of robot R has JOINTS joints and solves at least 99 of
+100 random reachable poses (random state seeded with SEED)."
+  (let ((c (make-chain w r base "r_gripper_tool_frame")))
+    (unwind-protect
+         (multiple-value-bind (solved problems)
+             (ik-round-trips c 100 (sb-ext:seed-random-state seed))
+           (is (= joints (chain-joint-count c)))
+           (is (>= solved 99))
+           (is (null problems) "~s" problems))
+      (destroy-chain c))))
+
 (test ik-prismatic-and-short-chains
   (if (not (probe-file *ik-pr2-urdf*))
       (skip "no PR2 model at ~a" *ik-pr2-urdf*)
@@ -86,20 +98,6 @@ a list of problems (answers off the target, outside the limits, or with wrong re
         (with-world (w)
           (let ((r (add-urdf w (uiop:read-file-string *ik-pr2-urdf*))))
             ;; base_link -> tool frame: the prismatic torso joint and the arm (8 joints)
-            (let ((c (make-chain w r "base_link" "r_gripper_tool_frame")))
-              (unwind-protect
-                   (multiple-value-bind (solved problems)
-                       (ik-round-trips c 100 (sb-ext:seed-random-state 5))
-                     (is (= 8 (chain-joint-count c)))
-                     (is (>= solved 99))
-                     (is (null problems) "~s" problems))
-                (destroy-chain c)))
+            (check-chain-round-trips w r "base_link" 8 5)
             ;; elbow -> tool frame: 3 joints, still exact on poses it can reach
-            (let ((c (make-chain w r "r_elbow_flex_link" "r_gripper_tool_frame")))
-              (unwind-protect
-                   (multiple-value-bind (solved problems)
-                       (ik-round-trips c 100 (sb-ext:seed-random-state 6))
-                     (is (= 3 (chain-joint-count c)))
-                     (is (>= solved 99))
-                     (is (null problems) "~s" problems))
-                (destroy-chain c))))))))
+            (check-chain-round-trips w r "r_elbow_flex_link" 3 6))))))

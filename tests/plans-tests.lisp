@@ -21,6 +21,15 @@
                                                                      'btw-tut::bottle-1)))
                         (cl-transforms:origin btw-tut:*final-object-destination*)))
 
+(defun move-bottle-logged (pose)
+  "Run move-bottle to POSE in a fresh projection; check that it returned the object and that the
+bottle arrived; return the log."
+  (btw-tut:init-projection)
+  (multiple-value-bind (value log) (run-logged (lambda () (btw-tut:move-bottle pose)))
+    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
+    (is (< (bottle-distance) 0.03))
+    log))
+
 (test bottle-grasps
   (is (equal '(:left-side :right-side :back :front) (man-int:object-type-grasps :bottle)))
   (is (null (member :top (man-int:object-type-grasps :bottle))))
@@ -56,10 +65,7 @@
     (signals error (desig:reference d) (exe:perform d))))
 
 (test move-bottle-in-view
-  (btw-tut:init-projection)
-  (multiple-value-bind (value log) (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-in-view*)))
-    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
-    (is (< (bottle-distance) 0.03))
+  (let ((log (move-bottle-logged btw-tut:*bottle-pose-in-view*)))
     (dolist (line '("Opening gripper and reaching" "Grasping" "Gripping"
                     "Assert grasp into knowledge base" "Lifting" "Putting"
                     "Retract grasp in knowledge base" "Retracting"))
@@ -68,19 +74,11 @@
     (is (null (search "Turning head." log)))))
 
 (test move-bottle-out-of-view
-  (btw-tut:init-projection)
-  (multiple-value-bind (value log)
-      (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-out-of-view*)))
-    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
-    (is (< (bottle-distance) 0.03))
+  (let ((log (move-bottle-logged btw-tut:*bottle-pose-out-of-view*)))
     (is (search "Turning head." log))))
 
 (test move-bottle-hard-to-grasp
-  (btw-tut:init-projection)
-  (multiple-value-bind (value log)
-      (run-logged (lambda () (btw-tut:move-bottle btw-tut:*bottle-pose-hard-to-grasp*)))
-    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value)
-    (is (< (bottle-distance) 0.03))
+  (let ((log (move-bottle-logged btw-tut:*bottle-pose-hard-to-grasp*)))
     ;; the first grasp fails and the next one, from the side facing the robot, is tried
     (is (search "Failed to grasp from LEFT-SIDE using RIGHT arm" log) "log: ~a" log)
     (is (search "[(TRYING-NEW-GRASP) INFO]" log))

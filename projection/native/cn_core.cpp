@@ -328,12 +328,10 @@ int cn_resolve_path(const char *uri, const char *base_dir, char *out, int cap) {
 }
 
 int cn_world_alive(int w) {
-  FpMasked fp;
   cn::ApiLock lock;
   return world_ok(w) ? 1 : 0;
 }
 int cn_world_count(void) {
-  FpMasked fp;
   cn::ApiLock lock;
   return g_live;
 }

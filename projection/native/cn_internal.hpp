@@ -91,9 +91,9 @@ template <class F> inline int guard(F &&f) {
 
 // True when the calling thread traps at most invalid, overflow and division by zero (SBCL's
 // default; underflow, denormal and inexact masked) and each of the N values at P is zero or of
-// magnitude in about [1e-100, 1e100] (binary exponent within +-330). Normalising and copying such a pose cannot raise any of those
-// three, so an entry point that does nothing else may skip FpMasked, whose two writes of the
-// control register cost more than the teleport itself.
+// magnitude in about [1e-100, 1e100] (binary exponent within +-330). Normalising and copying
+// such a pose cannot raise any of those three, so an entry point that does nothing else may
+// skip FpMasked, whose two writes of the control register cost more than the teleport itself.
 bool fp_tame(const double *p, int n);
 
 // ---- argument checks -----------------------------------------------------------------------
@@ -237,7 +237,7 @@ struct World {
   std::set<std::array<int, 4>> ignored;   // (objA, linkA, objB, linkB), A <= B
   // Bodies teleported since the last query (flag: user index 3 == 1). Their broadphase
   // bounding boxes are brought up to date once, by sync_aabbs(), before the next query that
-  // reads the broadphase (contacts, rays, distances, physics) or before bodies are deleted.
+  // reads the broadphase (contacts, rays, physics) or before bodies are deleted.
   std::vector<btCollisionObject *> stale_aabbs;
   World(const btVector3 &gravity);
   ~World();
@@ -257,6 +257,7 @@ void add_rb(World &w, btRigidBody *rb, int group, int mask);
 void teleport_rb(World &w, btRigidBody *rb, const btTransform &t);  // AABB update deferred
 bool teleport_rb_tame(World &w, btRigidBody *rb, const double *pose7);  // false: zero quaternion
 void sync_aabbs(World &w);  // broadphase AABBs of the bodies teleported since the last sync
+void forget_stale_aabbs(World &w);  // after updateAabbs(), which has done every body
 void set_object_pose(World &w, Object &o, const btTransform &t);
 btTransform object_pose(const Object &o);
 btTransform frame_pose(const Object &o, int link);   // link pose or body pose

@@ -173,12 +173,12 @@ extern "C" {
 int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);
-    sync_aabbs(w);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
     set_query_all(w, true);
     try {
-      w.dw->performDiscreteCollisionDetection();
+      w.dw->performDiscreteCollisionDetection();  // updates every bounding box first
+      forget_stale_aabbs(w);
     } catch (...) {
       set_query_all(w, false);
       throw;
@@ -240,7 +240,6 @@ int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist
 int cn_closest_distance(int wh, int oa, int la, int ob, int lb, double maxd, double *out7) {
   return guard([&] {
     World &w = world(wh);
-    sync_aabbs(w);
     Object &a = w.obj(oa, "object A");
     Object &b = w.obj(ob, "object B");
     check_link(a, la);

@@ -123,12 +123,15 @@ bool teleport_rb_tame(World &w, btRigidBody *rb, const double *pose) {
   return true;
 }
 
-void sync_aabbs(World &w) {
-  for (btCollisionObject *co : w.stale_aabbs) {
-    co->setUserIndex3(0);
-    if (co->getBroadphaseHandle()) w.dw->updateSingleAabb(co);
-  }
+void forget_stale_aabbs(World &w) {
+  for (btCollisionObject *co : w.stale_aabbs) co->setUserIndex3(0);
   w.stale_aabbs.clear();
+}
+
+void sync_aabbs(World &w) {
+  for (btCollisionObject *co : w.stale_aabbs)
+    if (co->getBroadphaseHandle()) w.dw->updateSingleAabb(co);
+  forget_stale_aabbs(w);
 }
 
 btTransform object_pose(const Object &o) {
@@ -317,8 +320,8 @@ struct KinematicRest {
   btDiscreteDynamicsWorld *dw;
   std::vector<btCollisionObject *> slept;
   explicit KinematicRest(World &w) : dw(w.dw) {
-    sync_aabbs(w);
     dw->updateAabbs();  // all bounding boxes, before the kinematic bodies stop being updated
+    forget_stale_aabbs(w);
     btCollisionObjectArray &all = dw->getCollisionObjectArray();
     for (int i = 0; i < all.size(); ++i) {
       btCollisionObject *co = all[i];

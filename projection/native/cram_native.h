@@ -25,7 +25,7 @@
  *     Teleporting a body that carries no attachment to a pose of moderate magnitudes only
  *     normalises and copies, and skips that masking.
  *   - Moving bodies (teleports, joint values) leaves their broadphase bounding boxes to be
- *     brought up to date once, at the next contact, distance, ray or physics call.
+ *     brought up to date once, at the next contact, ray or physics call.
  */
 #ifndef CRAM_NATIVE_H
 #define CRAM_NATIVE_H

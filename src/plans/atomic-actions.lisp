@@ -83,10 +83,9 @@ belief state."
 is rooted at), else the robot's pose."
   (let ((robot (btr:get-robot-object))
         (frame (robot-base-frame)))
-    (unless robot (pp-error "No robot in the belief state (BTR:*CURRENT-BULLET-WORLD*)."))
-    (if (btr:link-exists-p robot frame)
+    (if (and robot (btr:link-exists-p robot frame))
         (btr:link-pose robot frame)
-        (btr:pose robot))))
+        (robot-pose-in-map))))
 
 (defun pose-in-map (pose)
   "POSE (a POSE-STAMPED in any frame, or a plain POSE taken to be in the fixed frame) as a

@@ -15,24 +15,13 @@
 (defvar *current-ros-package* nil
   "The ROS package whose system LOAD-SYSTEM is loading.")
 
-(defparameter *ros-package-systems*
-  '(("cram_bullet_world_tutorial" . "cram-plans/cram-bullet-world-tutorial")
-    ("cram_pepper_demo" . "cram-plans/cram-pepper-demo")
-    ("cram_pepper_description" . "cram-plans/cram-pepper-description")
-    ("cram_pr2_description" . "cram-plans/cram-pr2-description")
-    ("cram_mobile_pick_place_plans" . "cram-plans/cram-mobile-pick-place-plans")
-    ("cram_object_knowledge" . "cram-plans/cram-object-knowledge")
-    ("cram_urdf_projection" . "cram-plans/cram-urdf-projection")
-    ("cram_bullet_reasoning" . "cram-plans/cram-bullet-reasoning"))
-  "ROS package name → the ASDF system that provides it in cram-plans.")
-
 (defun ros-package-system-name (ros-package)
-  "The ASDF system name for the ROS package ROS-PACKAGE (underscores read as hyphens)."
+  "The ASDF system name for the ROS package ROS-PACKAGE (underscores read as hyphens); this
+project provides it as cram-plans/NAME."
   (unless (and (stringp ros-package) (plusp (length ros-package)))
     (error "ROS-LOAD: expected a ROS package name string such as \"cram_pepper_demo\", got ~s."
            ros-package))
-  (or (cdr (assoc ros-package *ros-package-systems* :test #'string=))
-      (substitute #\- #\_ (string-downcase ros-package))))
+  (substitute #\- #\_ (string-downcase ros-package)))
 
 (defvar *roslisp-load-system* nil
   "roslisp's own LOAD-SYSTEM (it finds packages with rospack), kept for the ROS packages this
@@ -42,25 +31,24 @@ project does not provide; NIL when roslisp's loader is not loaded.")
   "Load the ASDF SYSTEM (a symbol or string) of the ROS package ROS-PACKAGE; without SYSTEM
 the one ROS-PACKAGE maps to. FORCE recompiles. Returns the system's name. A package this project
 does not provide is handed to roslisp's loader when it is loaded."
-  (let ((name (cond ((null system) (ros-package-system-name ros-package))
-                    ((symbolp system) (string-downcase (symbol-name system)))
-                    ((stringp system) system)
-                    (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system)))))
-    (ros-package-system-name ros-package)
-    ;; this project's systems live in cram-plans.asd as cram-plans/NAME; look them up and load
-    ;; them with no current ROS package, so that roslisp's search (rospack) stays out of it
-    (let ((*current-ros-package* nil))
-      (let ((ours (concatenate 'string "cram-plans/" name)))
-        (cond ((asdf:find-system ours nil) (setf name ours))
-              ((not (asdf:find-system name nil)) (setf name nil)))))
-    (cond (name
-           (asdf:load-system name :force force)
-           name)
+  (let* ((default (ros-package-system-name ros-package))
+         (name (cond ((null system) default)
+                     ((symbolp system) (string-downcase (symbol-name system)))
+                     ((stringp system) system)
+                     (t (error "ROS-LOAD:LOAD-SYSTEM: expected a system name, got ~s." system))))
+         ;; this project's systems live in cram-plans.asd as cram-plans/NAME; look them up and
+         ;; load them with no current ROS package, so that roslisp's search (rospack) stays out
+         (*current-ros-package* nil)
+         (found (find-if (lambda (n) (asdf:find-system n nil))
+                         (list (concatenate 'string "cram-plans/" name) name))))
+    (cond (found
+           (asdf:load-system found :force force)
+           found)
           (*roslisp-load-system*
            (funcall *roslisp-load-system* ros-package (or system ros-package) force))
           (t
            (error "ROS-LOAD:LOAD-SYSTEM: no ASDF system ~s for the ROS package ~s."
-                  (or system (ros-package-system-name ros-package)) ros-package)))))
+                  name ros-package)))))
 
 (defun install-cram-plans-load-system ()
   "Make ROS-LOAD:LOAD-SYSTEM this project's loader, keeping roslisp's when it was defined (roslisp
