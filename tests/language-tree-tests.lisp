@@ -63,8 +63,9 @@
     (is (null (value pulse)) "a pulse is consumed by reading it")))
 
 (deftest sleep-uses-replaceable-clock
-  (let ((slept '()))
-    (let ((cpl:*sleep-function* (lambda (s) (push s slept))))
+  (let ((slept '()) (lock (sb-thread:make-mutex :name "slept")))
+    ;; the two branches sleep in two threads: record under a lock, no push may be lost
+    (let ((cpl:*sleep-function* (lambda (s) (sb-thread:with-mutex (lock) (push s slept)))))
       (top-level (par (cpl:sleep 30) (cpl:sleep 2.5))))
     (is (equal '(30 2.5) (sort slept #'>)))
     (signals error (cpl:sleep -1))
