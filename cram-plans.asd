@@ -360,7 +360,13 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/costmap"
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
-               "cram-plans/tests/plans" "cram-plans/tests/runner"))
+               "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/seeds"))
+
+(defsystem "cram-plans/tests/seeds"
+  :description "Seed replays: tests/seeds/seed-NNN.lisp, each in a fresh SBCL."
+  :depends-on ("cram-plans/tests/base")
+  :pathname "tests/"
+  :components ((:file "seeds-tests")))
 
 ;;; Plans, object knowledge, tutorials and demos.
 

@@ -1,0 +1,56 @@
+;;;; The seeds' own pages replayed as tests: each tests/seeds/seed-NNN.lisp runs in a fresh SBCL
+;;;; that loads cram-plans the way the README tells a user (the checkout on ASDF's central
+;;;; registry, no CL_SOURCE_REGISTRY), reads ../shared/seeds/NNN_*.txt and pastes its code blocks.
+
+(defpackage :cram-seeds-tests
+  (:use :cl :fiveam)
+  (:export #:run-seed))
+
+(in-package :cram-seeds-tests)
+
+(def-suite seeds :in cram-plans-tests:all
+  :description "Seed replays: every code block of every tutorial page, as its reader pastes it.")
+(in-suite seeds)
+
+(defun seed-directory () (asdf:system-relative-pathname "cram-plans/tests/base" "tests/seeds/"))
+
+(defun run-seed (number)
+  "Replay seed NUMBER in a fresh SBCL. Returns its exit code, its `seed NNN: K/N blocks' line
+and its whole output; the output is also kept in out/seeds/seed-NUMBER.log."
+  (let* ((env (remove-if (lambda (kv) (or (uiop:string-prefix-p "CL_SOURCE_REGISTRY=" kv)
+                                          (uiop:string-prefix-p "ROS_MASTER_URI=" kv)))
+                         (sb-ext:posix-environ)))
+         (log (asdf:system-relative-pathname "cram-plans/tests/base"
+                                             (format nil "out/seeds/seed-~a.log" number)))
+         (process (sb-ext:run-program "/usr/bin/env"
+                                      (list "sbcl" "--noinform" "--non-interactive" "--no-userinit"
+                                            "--no-sysinit"
+                                            "--load" (namestring (merge-pathnames "run-seed.lisp" (seed-directory)))
+                                            "--eval" (format nil "(seed-run ~s)" number))
+                                      :environment env :output :stream :error :output :input nil
+                                      :wait nil :directory (namestring (seed-directory))))
+         (out (with-output-to-string (s)
+                (loop for line = (read-line (sb-ext:process-output process) nil)
+                      while line do (write-line line s)))))
+    (sb-ext:process-wait process)
+    (ensure-directories-exist log)
+    (with-open-file (f log :direction :output :if-exists :supersede) (write-string out f))
+    (let ((line (find-if (lambda (l) (uiop:string-prefix-p "seed " l))
+                         (reverse (uiop:split-string out :separator '(#\Newline))))))
+      (format t "~&~a~%" (or line (format nil "seed ~a: no verdict (see ~a)" number log)))
+      (finish-output)
+      (values (sb-ext:process-exit-code process) line out))))
+
+(defun seed-numbers ()
+  (sort (mapcar (lambda (p) (subseq (pathname-name p) 5))
+                (directory (merge-pathnames "seed-*.lisp" (seed-directory))))
+        #'string<))
+
+(test seed-replays
+  "Every seed page replays completely (K = N blocks)."
+  (dolist (n (seed-numbers))
+    (multiple-value-bind (code line out) (run-seed n)
+      (is (eql 0 code) "seed ~a: ~a~%~a" n (or line "no verdict")
+          (let ((fails (remove-if-not (lambda (l) (search ";; FAIL" l))
+                                      (uiop:split-string out :separator '(#\Newline)))))
+            (format nil "~{~a~%~}" (subseq fails 0 (min 20 (length fails)))))))))
