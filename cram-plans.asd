@@ -13,6 +13,35 @@
     (when (asdf:find-system name nil)
       (asdf:register-immutable-system name))))
 
+;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
+;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
+;; resort (after the central registry and the source registry), so that a plain
+;; (push ".../cram-plans/" asdf:*central-registry*) loads the ROS integration too; where roslisp
+;; is installed, `cram-plans' loads it (feature :CRAM-PLANS-ROSLISP), so the ROSLISP package
+;; exists in every cram-plans image.
+(defparameter *cram-plans-ros-lisp-trees* '("/usr/share/roslisp/" "/usr/share/common-lisp/ros/")
+  "Directory trees searched for Debian's roslisp and ROS message .asd files.")
+(defvar *cram-plans-ros-asd-files* nil
+  "System name -> .asd file under *CRAM-PLANS-ROS-LISP-TREES*, filled on first use.")
+(defun cram-plans-ros-asd-files ()
+  (or *cram-plans-ros-asd-files*
+      (let ((table (make-hash-table :test 'equal)))
+        (dolist (tree *cram-plans-ros-lisp-trees* table)
+          (when (uiop:directory-exists-p tree)
+            (uiop:collect-sub*directories
+             tree t t (lambda (dir)
+                        (dolist (file (uiop:directory-files dir "*.asd"))
+                          (setf (gethash (pathname-name file) table) file))))))
+        (setf *cram-plans-ros-asd-files* table))))
+(defun cram-plans-find-ros-system (name)
+  "ASDF search function: the .asd file of NAME under Debian's roslisp trees, or NIL."
+  (values (gethash (asdf:primary-system-name name) (cram-plans-ros-asd-files))))
+(unless (member 'cram-plans-find-ros-system asdf:*system-definition-search-functions*)
+  (setf asdf:*system-definition-search-functions*
+        (append asdf:*system-definition-search-functions* '(cram-plans-find-ros-system))))
+(when (asdf:find-system "roslisp" nil)
+  (pushnew :cram-plans-roslisp *features*))
+
 (defsystem "cram-plans/cram-utilities"
   :description "Lazy lists, variable bindings and small utilities (package CUT)."
   :depends-on ("alexandria")
@@ -53,7 +82,7 @@
                (:file "cram-tf")))
 
 (defsystem "cram-plans/cram-native"
-  :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, FCL, OSMesa, libpng)."
+  :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, OSMesa, libpng)."
   :depends-on ("cffi" "alexandria")
   :pathname "projection/"
   :serial t
@@ -171,7 +200,8 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                (:file "queries")
                (:file "pictures")
                (:file "facts")
-               (:file "utils")))
+               (:file "utils")
+               (:file "costmap-vis")))
 
 (defsystem "cram-plans/cram-common-designators"
   :description "MOTION-GROUNDING rules of the robot-independent motions and WAIT-PM (COMMON-DESIG)."
@@ -211,7 +241,50 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
                "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
-               "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"))
+               "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
+               "cram-plans/compat" "cram-plans/replay"
+               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
+
+(defsystem "cram-plans/replay"
+  :description "Recording of projection runs for the browser viewer (CRAM-VIEWER): states after
+each motion, replays written to disk, and BTR:VIEWER / BTR:DEBUG-WINDOW, which load the server
+(cram-plans/viewer) on first use."
+  :depends-on ("cram-plans/cram-bullet-reasoning" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-location-costmap" "cram-plans/cram-language" "cl-base64" "cl-ppcre")
+  :pathname "projection/viewer/"
+  :serial t
+  :components ((:file "package")
+               (:file "scene")
+               (:file "recorder")
+               (:file "export")
+               (:file "entry")
+               (:static-file "viewer.js")
+               (:static-file "viewer.css")))
+
+(defsystem "cram-plans/viewer"
+  :description "The browser viewer of the belief state: hunchentoot serves a three.js page (from
+Debian's libjs-three) that follows the world live (server-sent events) and replays runs."
+  :depends-on ("cram-plans/replay" "hunchentoot")
+  :pathname "projection/viewer/"
+  :components ((:file "server")))
+
+(defsystem "cram-plans/compat"
+  :description "CRAM compatibility for the seed-era (2017) API: PR2-PP-PLANS, the init functions
+called by hand, CRAM-PR2-DESCRIPTION:PR2, ROBOT-ARMS-PARKING-JOINT-STATES, the old location
+vocabulary ((:to :see) (:on \"CounterTop\") ...), MOVING-JOINTS and LOOKING-AT, as aliases."
+  :depends-on ("cram-plans/cram-bullet-world-tutorial")
+  :pathname "src/compat/"
+  :serial t
+  :components ((:file "compat-package")
+               (:file "compat-occupancy")
+               (:file "compat-world")
+               (:file "compat-designators")
+               (:file "compat-pp-plans")))
+
+(defsystem "cram-plans/tests/compat"
+  :depends-on ("cram-plans/tests/base" "cram-plans/compat")
+  :pathname "tests/"
+  :components ((:file "compat-tests")))
 
 (defsystem "cram-plans/roslisp-utilities"
   :description "ROS integration without roslisp: init and cleanup functions, URDFs from the
@@ -227,6 +300,7 @@ edges and markers. STARTUP-ROS loads roslisp-utilities/ros (roslisp) when it is 
                (:file "names")
                (:file "registry")
                (:file "description")
+               (:file "worlds")
                (:file "belief-tf")
                (:file "belief-markers")))
 
@@ -329,7 +403,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "ros-tests")
-               (:file "ros-live-tests")))
+               (:file "ros-live-tests")
+               (:file "ros-world-tests")))
 
 (defsystem "cram-plans/tests/urdf-proj"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
@@ -344,6 +419,18 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "costmap-tests")
                (:file "costmap-kitchen-tests")))
+
+(defsystem "cram-plans/tests/bad-input"
+  :description "The table-driven bad-input suite of every layer a user touches."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-prolog" "cram-plans/cram-language"
+               "cram-plans/cram-common-failures" "cram-plans/cl-transforms" "cram-plans/cram-designators"
+               "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
+               "cram-plans/cram-location-costmap" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-pr2-description")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "bad-input-tests")
+               (:file "bad-input-tests-2")))
 
 (defsystem "cram-plans/tests/runner"
   :depends-on ("cram-plans/tests/base" "yason" "sb-posix")
@@ -360,7 +447,21 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/costmap"
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
-               "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/seeds"))
+               "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
+               "cram-plans/tests/bad-input" "cram-plans/tests/readme"))
+
+(defsystem "cram-plans/tests/readme"
+  :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."
+  :depends-on ("cram-plans/tests/ros")
+  :pathname "tests/"
+  :components ((:file "readme-tests")))
+
+(defsystem "cram-plans/tests/viewer"
+  :description "The browser viewer: its scene and replay data, and the page in headless Chromium."
+  :depends-on ("cram-plans/tests/base" "cram-plans/viewer" "cram-plans/cram-bullet-world-tutorial"
+               "yason" "sb-posix")
+  :pathname "tests/"
+  :components ((:file "viewer-tests")))
 
 (defsystem "cram-plans/tests/seeds"
   :description "Seed replays: tests/seeds/seed-NNN.lisp, each in a fresh SBCL."
@@ -423,4 +524,4 @@ bottles."
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
-  :components ((:file "plans-tests")))
+  :components ((:file "plans-tests") (:file "plans-placing-tests")))

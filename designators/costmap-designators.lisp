@@ -233,6 +233,8 @@ robot, object or link) is signalled, not turned into a failing goal."
   "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged
 costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
   (let ((costmap (designator-costmap designator)))
+    ;; the costmap visualization shows the costmap last sampled (BTR:CLEAR-COSTMAP-VIS-OBJECT)
+    (when costmap (btr:add-costmap-function-object costmap))
     (if costmap (costmap-samples costmap) nil)))
 
 (desig:register-location-generator 20 costmap-location-generator

@@ -5,7 +5,7 @@
 (defun point-xy (point what)
   "(values x y) as double-floats of POINT: a 3D-VECTOR, a pose (its origin), or a list (x y ...)."
   (flet ((ok (x y)
-           (unless (and (realp x) (realp y) (< (abs x) 1d6) (< (abs y) 1d6))
+           (unless (and (realp x) (realp y) (not (and (floatp x) (sb-ext:float-nan-p x))) (not (and (floatp y) (sb-ext:float-nan-p y))) (< (abs x) 1d6) (< (abs y) 1d6))
              (error "~a: the point ~s has non-finite or non-real coordinates." what point))
            (return-from point-xy (values (to-double x) (to-double y)))))
     (typecase point
@@ -29,7 +29,7 @@
            (let ((v (etypecase covariance
                       (list (nth c (nth r covariance)))
                       (array (aref covariance r c)))))
-             (unless (and (realp v) (< (abs v) 1d6))
+             (unless (and (realp v) (not (and (floatp v) (sb-ext:float-nan-p v))) (< (abs v) 1d6))
                (error "MAKE-GAUSS-COST-FUNCTION: covariance ~s, entry (~d ~d) is ~s, expected ~
                        a finite real." covariance r c v))
              (to-double v))))
@@ -160,7 +160,7 @@ pose), rotated by OFFSET radians, with SAMPLES orientations SAMPLE-STEP apart."
 
 (defun make-constant-height-function (height)
   "A height generator giving HEIGHT (metres) everywhere."
-  (unless (and (realp height) (< (abs height) 1d6))
+  (unless (and (realp height) (not (and (floatp height) (sb-ext:float-nan-p height))) (< (abs height) 1d6))
     (error "MAKE-CONSTANT-HEIGHT-FUNCTION: the height is ~s, expected a finite real." height))
   (let ((z (list (to-double height))))
     (lambda (x y) (declare (ignore x y)) z)))

@@ -128,7 +128,7 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
             do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a positive real (metres)."
                       what value))
     (loop for (what value) in `(("origin x" ,origin-x) ("origin y" ,origin-y))
-          unless (and (realp value) (< (abs value) 1d6))
+          unless (and (realp value) (not (and (floatp value) (sb-ext:float-nan-p value))) (< (abs value) 1d6))
             do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a finite real." what value))
     (when (> (/ (* width height) (* resolution resolution)) 2.5d7)
       (error "MAKE-LOCATION-COSTMAP: ~s x ~s m at ~s m resolution is more than 25 million ~

@@ -11,8 +11,41 @@
 ;;;; The clauses below come before every other group's clauses and answer from the keyed
 ;;;; facts of the current robot (ROB-INT:*ROBOT-NAME*) first; with no current robot, from
 ;;;; the keyed facts of any robot.  Unkeyed clauses of later groups follow.
+;;;;
+;;;; Before all of these come the user's own metadata: the tutorials have the user type
+;;;;   (def-fact-group costmap-metadata () (<- (costmap-size 12 12)) ...)
+;;;; in their own package (e.g. BTW-TUT), where COSTMAP-SIZE is that package's symbol, not
+;;;; this package's.  A predicate of the same name as a metadata predicate, defined by a fact
+;;;; group in any other package, is the user stating the value: it answers first, so the
+;;;; costmaps use what the user typed (see USER-COSTMAP-METADATA-FACTS).
 
 (in-package :cram-location-costmap)
+
+(defvar *reading-user-metadata* nil
+  "True while the user's metadata predicates are queried (a user clause that asks the
+metadata interface again then gets no user answer instead of recursing without end).")
+
+(defun user-costmap-metadata-facts (fact)
+  "The facts (FUNCTOR value...) stated by the user for the metadata FACT (its functor is one
+of this package's metadata predicates, its arguments are only counted): the answers of every
+predicate named like FUNCTOR in another package that has clauses, i.e. a fact group the user
+wrote with the short names in their own package.  Packages are taken in name order."
+  (unless (or *reading-user-metadata* (not (consp fact)) (not (symbolp (car fact))))
+    (let* ((functor (car fact))
+           (arity (length (cdr fact)))
+           (name (symbol-name functor))
+           (candidates '()))
+      (dolist (package (sort (copy-list (list-all-packages)) #'string< :key #'package-name))
+        (let ((symbol (find-symbol name package)))
+          (when (and symbol (not (eq symbol functor)) (not (member symbol candidates))
+                     (prolog:predicate-clauses symbol))
+            (push symbol candidates))))
+      (when candidates
+        (let ((*reading-user-metadata* t)
+              (vars (loop for i below arity collect (intern (format nil "?U~d" i) :cram-location-costmap))))
+          (loop for symbol in (nreverse candidates)
+                append (loop for answer in (cut:force-ll (prolog `(,symbol ,@vars)))
+                             collect (cons functor (mapcar (lambda (v) (cut:var-value v answer)) vars)))))))))
 
 (def-fact-group location-costmap-metadata-interface
     (costmap-size costmap-origin costmap-resolution
@@ -23,6 +56,10 @@
 
   (<- (robot-costmap-metadata ?robot-name ?metadata-fact) (fail))
 
+  (<- (user-costmap-metadata ?metadata-fact)
+    (lisp-fun user-costmap-metadata-facts ?metadata-fact ?facts)
+    (member ?metadata-fact ?facts))
+
   (<- (current-robot-costmap-metadata ?metadata-fact)
     (symbol-value rob-int:*robot-name* ?current)
     (-> (lisp-pred identity ?current)
@@ -30,23 +67,43 @@
         (robot-costmap-metadata ?_ ?metadata-fact)))
 
   (<- (costmap-size ?width ?height)
+    (user-costmap-metadata (costmap-size ?width ?height)))
+  (<- (costmap-size ?width ?height)
     (current-robot-costmap-metadata (costmap-size ?width ?height)))
+  (<- (costmap-origin ?x ?y)
+    (user-costmap-metadata (costmap-origin ?x ?y)))
   (<- (costmap-origin ?x ?y)
     (current-robot-costmap-metadata (costmap-origin ?x ?y)))
   (<- (costmap-resolution ?resolution)
+    (user-costmap-metadata (costmap-resolution ?resolution)))
+  (<- (costmap-resolution ?resolution)
     (current-robot-costmap-metadata (costmap-resolution ?resolution)))
+  (<- (costmap-padding ?padding)
+    (user-costmap-metadata (costmap-padding ?padding)))
   (<- (costmap-padding ?padding)
     (current-robot-costmap-metadata (costmap-padding ?padding)))
   (<- (costmap-manipulation-padding ?padding)
+    (user-costmap-metadata (costmap-manipulation-padding ?padding)))
+  (<- (costmap-manipulation-padding ?padding)
     (current-robot-costmap-metadata (costmap-manipulation-padding ?padding)))
+  (<- (costmap-in-reach-distance ?distance)
+    (user-costmap-metadata (costmap-in-reach-distance ?distance)))
   (<- (costmap-in-reach-distance ?distance)
     (current-robot-costmap-metadata (costmap-in-reach-distance ?distance)))
   (<- (costmap-reach-minimal-distance ?distance)
+    (user-costmap-metadata (costmap-reach-minimal-distance ?distance)))
+  (<- (costmap-reach-minimal-distance ?distance)
     (current-robot-costmap-metadata (costmap-reach-minimal-distance ?distance)))
+  (<- (visibility-costmap-size ?radius)
+    (user-costmap-metadata (visibility-costmap-size ?radius)))
   (<- (visibility-costmap-size ?radius)
     (current-robot-costmap-metadata (visibility-costmap-size ?radius)))
   (<- (orientation-samples ?count)
+    (user-costmap-metadata (orientation-samples ?count)))
+  (<- (orientation-samples ?count)
     (current-robot-costmap-metadata (orientation-samples ?count)))
+  (<- (orientation-sample-step ?angle)
+    (user-costmap-metadata (orientation-sample-step ?angle)))
   (<- (orientation-sample-step ?angle)
     (current-robot-costmap-metadata (orientation-sample-step ?angle))))
 
@@ -69,6 +126,9 @@ a target sampled for poses that see it, in metres.")
 generated per sampled position.")
   (orientation-sample-step "(orientation-sample-step ?angle): the angle between consecutive
 sampled orientations, in radians.")
+  (user-costmap-metadata "(user-costmap-metadata ?metadata-fact): a metadata fact the user
+stated with the short names in their own package, e.g. BTW-TUT::COSTMAP-SIZE; it answers
+before the robot's own metadata.")
   (robot-costmap-metadata "(robot-costmap-metadata ?robot-name ?metadata-fact): a metadata
 fact such as (costmap-padding 0.3) that holds when ?robot-name is the current robot.")
   (current-robot-costmap-metadata "(current-robot-costmap-metadata ?metadata-fact): the

@@ -11,7 +11,7 @@
    #:costmap-padding #:costmap-manipulation-padding
    #:costmap-in-reach-distance #:costmap-reach-minimal-distance
    #:visibility-costmap-size #:orientation-samples #:orientation-sample-step
-   #:robot-costmap-metadata #:current-robot-costmap-metadata
+   #:robot-costmap-metadata #:current-robot-costmap-metadata #:user-costmap-metadata
    ;; costmaps
    #:location-costmap #:make-location-costmap #:get-cost-map #:get-map-value
    #:costmap-samples #:register-cost-function #:register-height-generator
@@ -42,4 +42,4 @@
    #:robot-pose-visibility-validator #:robot-pose-collision-validator
    #:line-of-sight-p #:robot-camera-height
    ;; pictures
-   #:costmap-heat-map-png))
+   #:costmap-heat-map-png #:costmap-heat-map-image))

@@ -85,8 +85,43 @@ resolved-designator), motions (command argument...), locations a pose, objects t
 ROLE selects how object designators are resolved. Signals DESIGNATOR-ERROR when there is no
 grounding."))
 
+(defmethod reference ((designator t) &optional role)
+  (declare (ignore role))
+  (error 'designator-error :designator designator
+                           :reason (format nil "REFERENCE: expected a designator (made with A, AN ~
+or MAKE-DESIGNATOR), got ~s" designator)))
+
+(defun check-grounding-failed (designator solution)
+  "Signal a DESIGNATOR-ERROR when SOLUTION, the first grounding of DESIGNATOR, is a list
+\(GROUNDING-FAILED ...) by which a grounding rule reports why it cannot ground DESIGNATOR."
+  (when (and (consp solution) (symbolp (car solution)) (car solution)
+             (string= (symbol-name (car solution)) "GROUNDING-FAILED"))
+    (error 'designator-error
+           :designator designator
+           :reason (let ((*print-length* 10) (*print-level* 4))
+                     (format nil "the designator cannot be grounded: ~{~a~^ ~}"
+                             (mapcar (lambda (x) (if (typep x '(or string condition)) (princ-to-string x) (format nil "~s" x)))
+                                     (cdr solution)))))))
+
+(defun check-location-pose-property (designator)
+  "Signal a DESIGNATOR-ERROR when the location DESIGNATOR has a POSE property that is an atom
+other than a pose (a CL-TRANSFORMS:POSE, stamped or not): a string, a number, a symbol."
+  (when (typep designator 'location-designator)
+    (let ((pose (second (find-if (lambda (entry)
+                                   (and (consp entry) (symbolp (car entry))
+                                        (string= (symbol-name (car entry)) "POSE")))
+                                 (description designator)))))
+      ;; lists (((x y z) (qx qy qz qw)) and what custom generators read) are left to the
+      ;; generators; an atom other than a pose object (a string, number, symbol) is never one
+      (when (and pose (atom pose) (not (typep pose 'cl-transforms:pose)))
+        (error 'designator-error
+               :designator designator
+               :reason (format nil "the location's (pose ~s) is not a pose; expected a ~
+CL-TRANSFORMS:POSE or POSE-STAMPED" pose))))))
+
 (defmethod reference ((designator designator) &optional role)
   (declare (ignore role))
+  (check-location-pose-property designator)
   (with-slots (lock data effective) designator
     (sb-thread:with-recursive-lock (lock)
       (if effective
@@ -94,12 +129,18 @@ grounding."))
           (let ((solutions (ensure-solutions designator)))
             (when (null solutions)
               (no-solution-error designator))
+            (check-grounding-failed designator (car solutions))
             (setf (designator-data designator) (car solutions))
             (car solutions))))))
 
 (defgeneric next-solution (designator)
   (:documentation "A new designator, equated after DESIGNATOR's chain, whose reference is the
 solution after DESIGNATOR's own one; NIL when there is none."))
+
+(defmethod next-solution ((designator t))
+  (error 'designator-error :designator designator
+                           :reason (format nil "NEXT-SOLUTION: expected a designator, got ~s"
+                                           designator)))
 
 (defmethod next-solution ((designator designator))
   (reference designator)

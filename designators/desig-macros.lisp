@@ -10,6 +10,8 @@
 ;;;;   - (a ...), (an ...) and (all ...) become nested designators;
 ;;;;   - (quote x), (function f) and backquoted forms are evaluated;
 ;;;;   - any other list is walked element by element with these same rules.
+;;;; A designator form written in place of a property, (an object (type bowl)), is the property
+;;;; keyed by its type, (object #<AN OBJECT (TYPE BOWL)>).
 ;;;; A property (when condition (key value...)...) contributes its properties only when
 ;;;; CONDITION (any Lisp form) evaluates to true. Symbols are never replaced by their global
 ;;;; values at macroexpansion time: a *special* is read when the designator is built.
@@ -59,6 +61,11 @@
   (cond ((not (consp property))
          (error "Designator property ~s: expected a list (KEY VALUE...) or ~
                  (WHEN condition (KEY VALUE...)...)." property))
+        ((designator-form-p property)
+         ;; a designator written where a property goes, (a motion (type detecting)
+         ;; (an object (type bowl))): the property (OBJECT <that designator>)
+         `(list (list ,(intern (symbol-name (second property)) :keyword)
+                      ,(value-form property))))
         ((eq (car property) 'when)
          (when (null (cdr property))
            (error "Designator property ~s: WHEN needs a condition form." property))

@@ -300,15 +300,22 @@ two designators that are already equal is an error."
 
 (defvar *print-depth* 0)
 
-(defun write-property-value (value stream)
-  (cond ((keywordp value) (write-string (symbol-name value) stream))
-        ((and (consp value) (null (cdr (last value))))
-         (write-char #\( stream)
-         (loop for (v . rest) on value
-               do (write-property-value v stream)
-                  (when rest (write-char #\Space stream)))
-         (write-char #\) stream))
-        (t (prin1 value stream))))
+(defun write-property-value (entry stream)
+  "Write the description ENTRY (KEY VALUE...) as CRAM prints it: the key and the values that
+are symbols without package prefix or colon, other values as WRITE prints them, so keywords
+inside a list value keep their colons: (TYPE BOTTLE), (ARM (:LEFT :RIGHT)), (POSE ((:POSE ...)))."
+  (flet ((bare (v)
+           (if (and (symbolp v) v)
+               (write-string (symbol-name v) stream)
+               (write v :stream stream))))
+    (if (and (consp entry) (null (cdr (last entry))))
+        (progn
+          (write-char #\( stream)
+          (loop for (v . rest) on entry
+                do (bare v)
+                   (when rest (write-char #\Space stream)))
+          (write-char #\) stream))
+        (bare entry))))
 
 (defmethod print-object ((designator designator) stream)
   (if *print-readably*

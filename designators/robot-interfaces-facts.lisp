@@ -7,13 +7,18 @@
 
 (def-fact-group robot-metadata (robot robot-base-frame robot-base-link robot-odom-frame
                                 robot-torso-link-joint robot-joint-states)
-  ;; When a current robot is set, it is the only answer; otherwise every robot a loaded
-  ;; description declares.
+  ;; When a current robot is set, it is the only answer; else the described robot loaded in the
+  ;; belief state (LOADED-ROBOT-NAME); else every robot a loaded description declares.
   (<- (robot ?robot-name)
     (symbol-value *robot-name* ?current)
     (lisp-pred identity ?current)
     (cut)
     (== ?robot-name ?current))
+  (<- (robot ?robot-name)
+    (lisp-fun loaded-robot-name ?loaded)
+    (lisp-pred identity ?loaded)
+    (cut)
+    (== ?robot-name ?loaded))
   (<- (robot-base-frame ?robot-name ?frame) (fail))
   (<- (robot-base-link ?robot-name ?link) (fail))
   (<- (robot-odom-frame ?robot-name ?frame) (fail))

@@ -31,19 +31,34 @@ DESCRIBE shows it."
 
 ;;; Names
 
+(defvar *loaded-robot-name-function* nil
+  "A function of no arguments returning the name of the described robot that is loaded (in the
+current belief state, or as *ROBOT-URDF*), or NIL; the belief state sets it. CURRENT-ROBOT-NAME
+and the ROBOT predicate answer that robot while *ROBOT-NAME* is NIL.")
+
+(defvar *all-described-robots* nil
+  "True while DESCRIBED-ROBOT-NAMES asks for every described robot.")
+
+(defun loaded-robot-name ()
+  "The described robot that is loaded (see *LOADED-ROBOT-NAME-FUNCTION*), or NIL."
+  (and (not *all-described-robots*) *loaded-robot-name-function*
+       (let ((*all-described-robots* t))
+         (ignore-errors (funcall *loaded-robot-name-function*)))))
+
 (defun described-robot-names ()
   "Every robot name declared by a loaded robot description through (ROBOT ?NAME) facts,
 in clause order, whatever the current robot is."
-  (let ((*robot-name* nil))
+  (let ((*robot-name* nil) (*all-described-robots* t))
     (remove-duplicates
      (mapcar (lambda (bindings) (cut:var-value '?robot-name bindings))
              (cut:force-ll (prolog '(robot ?robot-name))))
      :from-end t)))
 
 (defun current-robot-name ()
-  "The name of the current robot (the value of *ROBOT-NAME*).  Signals ROBOT-INTERFACE-ERROR
-when no robot has been chosen."
+  "The name of the current robot: the value of *ROBOT-NAME*, else the described robot loaded in
+the belief state (LOADED-ROBOT-NAME).  Signals ROBOT-INTERFACE-ERROR when there is none."
   (or *robot-name*
+      (loaded-robot-name)
       (let ((described (described-robot-names)))
         (robot-interface-error
          "No current robot: ~s is NIL. Choose one with (rob-int:set-robot-name NAME), where ~

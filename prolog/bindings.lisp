@@ -44,6 +44,9 @@ returns the last cons found, or NIL."
 (defun var-value (var bindings)
   "The value of VAR in BINDINGS with all bound variables inside it substituted; VAR itself (or
 the last variable of its chain) when unbound."
+  (unless (and (listp bindings) (every #'consp bindings))
+    (error "VAR-VALUE of ~s: expected a binding alist ((?var . value) ...), got ~s."
+           var (if (listp bindings) (find-if-not #'consp bindings) bindings)))
   (substitute-vars var bindings))
 
 (defun is-bound (var bindings)

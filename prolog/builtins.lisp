@@ -112,14 +112,30 @@ function), got ~s." goal f)))))
 (def-native-predicate equal (m cont a b)
   (when (equal (resolve-term a) (resolve-term b)) (solve-continue cont)))
 
+(declaim (inline comparable-p))
+(defun comparable-p (x)
+  (and (realp x) (not (and (floatp x) (sb-ext:float-nan-p x)))))
+
+(defun comparison-error (name x y)
+  "Signal the PROLOG-ERROR of the comparison (NAME X Y) whose arguments are not both numbers."
+  (flet ((shown (v) (if (pvar-p v) "?_" (format nil "~s" (lisp-argument v))))
+         (described (v)
+           (cond ((pvar-p v) "an unbound variable")
+                 ((and (floatp v) (sb-ext:float-nan-p v)) "NaN")
+                 (t (format nil "~s" (lisp-argument v))))))
+    (prolog-error "(~a ~a ~a): ~a compares two real numbers (not NaN), but ~{~a~^ and ~}."
+                  name (shown x) (shown y) name
+                  (append (unless (comparable-p x)
+                            (list (format nil "the first argument is ~a" (described x))))
+                          (unless (comparable-p y)
+                            (list (format nil "the second argument is ~a" (described y))))))))
+
 (macrolet ((compare (name op)
              `(def-native-predicate ,name (m cont a b)
                 (let ((x (deref a)) (y (deref b)))
-                  (if (and (realp x) (realp y))
+                  (if (and (comparable-p x) (comparable-p y))
                       (when (,op x y) (solve-continue cont))
-                      (multiple-value-bind (result ok)
-                          (call-lisp #',op (list (lisp-argument x) (lisp-argument y)))
-                        (when (and ok result) (solve-continue cont))))))))
+                      (comparison-error ',name x y))))))
   (compare < <) (compare > >) (compare <= <=) (compare >= >=))
 
 ;;; Lists

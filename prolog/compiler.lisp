@@ -367,6 +367,10 @@ goal function reads the frame only to build the call's arguments, before calling
          (compile-goal (list 'call goal)))
         ((atom goal)
          (prolog-error "A goal must be a list (functor arg...), got ~s." goal))
+        ((source-var-p (car goal))
+         (prolog-error "The goal ~s has the variable ~s as its functor; a goal's functor must ~
+be a symbol (write (call ~s ...) to call a goal held in a variable)."
+                       goal (car goal) (car goal)))
         (t
          (let ((pred (resolve-functor (car goal))))
            (if (pred-control pred)
@@ -481,6 +485,7 @@ point is dropped before the last clause."
 (declaim (inline try-clauses))
 (defun try-clauses (m clauses args cont)
   "Run each of the CLAUSES (a non-empty list) in turn, leaving a choice point for the rest."
+  (count-step m)
   (if (cdr clauses)
       (resume-clauses m (push-cp m #'retry-clauses clauses args cont) clauses)
       (run-clause m (car clauses) args cont (machine-cp-top m))))

@@ -46,6 +46,9 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
       `(register-control
         ',name
         (lambda (,args)
+          (unless (alexandria:proper-list-p ,args)
+            (prolog-error "The goal ~s: ~s needs a proper list of arguments, got ~s."
+                          (cons ',name ,args) ',name ,args))
           (check-goal-arity ',name ,args ,min ,max)
           (destructuring-bind ,lambda-list ,args ,@body))))))
 
@@ -92,8 +95,8 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
 
 (define-control or (&rest goals) (compile-or goals))
 
-(define-control not (&rest goals)
-  (let ((g (compile-body goals)))
+(define-control not (goal &rest more-goals)
+  (let ((g (compile-body (cons goal more-goals))))
     (declare (type function g))
     (lambda (m frame cont barrier)
       (declare (ignore barrier))
@@ -136,14 +139,15 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
                        (lambda () (cut-to m h) (funcall then m frame cont barrier))
                        (machine-cp-top m))))))))
 
-(define-control -> (condition &optional (then '(true)) else)
+(define-control -> (condition then &optional else)
   (compile-if-then-else condition then else nil))
 
-(define-control *-> (condition &optional (then '(true)) else)
+(define-control *-> (condition then &optional else)
   (compile-if-then-else condition then else t))
 
 (define-control call (goal &rest extra-args)
-  (let ((build (compile-build (cons goal extra-args))))
+  (let ((goal-source goal)
+        (build (compile-build (cons goal extra-args))))
     (declare (type function build))
     (lambda (m frame cont barrier)
       (declare (ignore barrier))
@@ -152,13 +156,14 @@ LAMBDA-LIST) into a goal function (M FRAME CONT BARRIER)."
         (meta-call m (if (cdr parts)
                          (append (if (consp goal) goal (list goal)) (cdr parts))
                          goal)
-                   cont)))))
+                   cont (cons 'call (cons goal-source extra-args)))))))
 
-(defun meta-call (m goal cont)
-  "Prove the run-time term GOAL, then call CONT. Opaque to cut."
+(defun meta-call (m goal cont &optional source)
+  "Prove the run-time term GOAL, then call CONT. Opaque to cut. SOURCE, the goal as written,
+names it in errors."
   (let ((goal (deref goal)))
     (when (pvar-p goal)
-      (prolog-error "CALL of an unbound variable ~a: a goal was expected." goal))
+      (prolog-error "~@[~s: ~]CALL of an unbound variable: a goal was expected." source))
     (unless (consp goal)
       (prolog-error "A goal must be a list (functor arg...), got ~s." goal))
     (let* ((f (deref (car goal)))

@@ -35,6 +35,11 @@ defines without either group declaring the functor extendable."))
           (old (gethash name *fact-groups*)))
       (dolist (f functors)
         (let ((pred (gethash f *predicates*)))
+          (when (and pred (or (pred-native pred) (pred-control pred)))
+            (error 'fact-group-error
+                   :functor f :group name :other-group nil
+                   :message (format nil "Fact group ~s defines clauses for ~s, a built-in ~
+predicate, which cannot be redefined or extended; choose another name." name f)))
           (when pred
             (dolist (source (pred-sources pred))
               (let ((other (gethash (car source) *fact-groups*)))
@@ -226,6 +231,7 @@ other ?symbols fresh variables."
 (defun make-handler-entry (pred handler clause-entry)
   (declare (ignore pred))
   (lambda (m args cont)
+    (count-step m)
     (multiple-value-bind (view-args view) (handler-view args)
       (let ((solutions (and (alexandria:proper-list-p view-args)
                             (apply handler nil view-args))))

@@ -14,7 +14,7 @@
 (loop for (functor doc) in
       '((and "(and goal...): every goal in turn.")
         (or "(or goal...): the goals' solutions one after the other.")
-        (not "(not goal...): succeeds, binding nothing, when the conjunction of the goals has no solution.")
+        (not "(not goal goal...): at least one goal; succeeds, binding nothing, when the conjunction of the goals has no solution.")
         (-> "(-> condition then [else]): THEN with the first solution of CONDITION, else ELSE (default FAIL).")
         (*-> "(*-> condition then [else]): THEN for every solution of CONDITION; ELSE when it has none.")
         (once "(once goal...): the first solution of the conjunction of the goals.")

@@ -66,12 +66,27 @@ New values are assigned to the BINDINGS variables in order; missing ones keep th
   "True when OBJECT is a list or a lazy list (a cons chain that may end in a lazy tail)."
   (listp object))
 
+(defun not-a-list-error (function object)
+  (error 'lazy-list-type-error :function function :datum object))
+
+(define-condition lazy-list-type-error (error)
+  ((function :initarg :function :reader lazy-list-type-error-function)
+   (datum :initarg :datum :reader lazy-list-type-error-datum))
+  (:report (lambda (c s)
+             (let ((*print-length* 10) (*print-level* 4))
+               (format s "~s: expected a list or a lazy list, got ~s."
+                       (lazy-list-type-error-function c) (lazy-list-type-error-datum c))))))
+
 (defun lazy-car (list)
   "The first element of the lazy LIST."
-  (car list))
+  (if (listp list)
+      (car list)
+      (not-a-list-error 'lazy-car list)))
 
 (defun lazy-cdr (list)
   "The rest of the lazy LIST, computing its next element if needed (at most once)."
+  (unless (listp list)
+    (not-a-list-error 'lazy-cdr list))
   (let ((rest (cdr list)))
     (if (lazy-tail-p rest)
         (setf (cdr list) (expand-tail rest))
@@ -88,8 +103,11 @@ New values are assigned to the BINDINGS variables in order; missing ones keep th
 (defun force-ll (list)
   "Expand every element of the lazy LIST and return it as an ordinary list. Never returns for an
 infinite lazy list."
+  (unless (listp list)
+    (not-a-list-error 'force-ll list))
   (do ((l list (lazy-cdr l)))
-      ((null l) list)))
+      ((not (consp l))
+       (if (null l) list (not-a-list-error 'force-ll list)))))
 
 (defun expanded-length (list)
   "The number of elements of the lazy LIST computed so far (no further expansion)."

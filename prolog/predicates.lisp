@@ -12,10 +12,15 @@
 predicate called with an unbound goal, and similar."))
 
 (define-condition prolog-resource-error (prolog-error) ()
-  (:documentation "A query ran out of stack or heap (for example an endless recursion)."))
+  (:documentation "A query ran out of stack or heap (an endless recursion, a term nested too
+deeply): it used more heap than *PROLOG-HEAP-LIMIT* allows, or overflowed the Lisp stack. The
+query is abandoned; the image stays usable."))
 
 (defun prolog-error (format &rest args)
-  (error 'prolog-error :message (apply #'format nil format args)))
+  "Signal PROLOG-ERROR with the formatted message (terms printed at most 8 levels deep and 30
+elements long)."
+  (error 'prolog-error :message (let ((*print-level* 8) (*print-length* 30) (*print-circle* nil))
+                                  (apply #'format nil format args))))
 
 (defvar *break-on-lisp-errors* nil
   "When NIL, a Lisp error inside LISP-FUN, LISP-PRED (and the other predicates calling Lisp

@@ -9,7 +9,10 @@ Clauses are compiled into closures (continuation passing, variables bound destru
 undone through a trail, first-argument indexing of every predicate,
 recompiled on the first call after their fact groups change). PROLOG returns a lazy list: each
 further solution resumes the solver from its choice-point stack. Deterministic tail recursion
-runs in constant Lisp stack; running out of stack or heap signals PROLOG-RESOURCE-ERROR.
+runs in constant Lisp stack. Resource limits: a query whose heap use passes *PROLOG-HEAP-LIMIT*
+(checked every few thousand predicate calls, also while FORCE-LL reads its solutions) or that
+overflows the Lisp stack (terms nested hundreds of thousands deep) signals
+PROLOG-RESOURCE-ERROR; the query is abandoned and the image stays usable.
 
 Decisions on CRAM's quirks:
 - == unifies (as in CRAM); EQUAL succeeds when both terms, fully substituted, are EQUAL, and
@@ -38,7 +41,7 @@ Decisions on CRAM's quirks:
   (:export
    ;; queries and definitions
    #:prolog #:def-fact-group #:<- #:def-prolog-handler #:remove-prolog-handler
-   #:*break-on-lisp-errors* #:prolog-error #:fact-group-error #:prolog-resource-error
+   #:*break-on-lisp-errors* #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
    #:fact-group-names #:fact-group-clauses #:remove-fact-group #:predicate-clauses
    #:add-fact #:remove-facts #:predicate
    ;; native predicates

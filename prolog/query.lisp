@@ -39,12 +39,29 @@ left out."
             unless (eq value sym)
               collect (cons sym value)))))
 
+(defun call-with-storage-guard (thunk)
+  "Call THUNK and return its values. Running out of Lisp stack or heap inside it signals
+PROLOG-RESOURCE-ERROR after unwinding THUNK and collecting the garbage it left."
+  (let ((condition
+          (handler-case (return-from call-with-storage-guard (funcall (the function thunk)))
+            (prolog-resource-error (c) c)
+            (storage-condition (c)
+              (make-condition
+               'prolog-resource-error
+               :message (format nil "The Prolog query ran out of ~a: probably an endless ~
+recursion or a term nested too deeply (hundreds of thousands of levels). The query was ~
+abandoned; the image is unharmed."
+                                (if (typep c 'sb-kernel::control-stack-exhausted)
+                                    "Lisp stack (control stack exhausted)"
+                                    (format nil "memory (~a)" (type-of c)))))))))
+    ;; what the abandoned query held is garbage now; free it before anything else needs room
+    (sb-ext:gc :full t)
+    (error condition)))
+
 (defmacro with-storage-guard (() &body body)
-  `(handler-case (progn ,@body)
-     (storage-condition (c)
-       (error 'prolog-resource-error
-              :message (format nil "The Prolog query ran out of memory or stack (~a): ~
-probably an endless or too deep recursion." (type-of c))))))
+  "Run BODY; running out of Lisp stack or heap inside it signals PROLOG-RESOURCE-ERROR (after
+unwinding BODY and collecting what it held)."
+  `(call-with-storage-guard (lambda () ,@body)))
 
 (defun prolog (goal &optional bindings)
   "Prove GOAL (a term; ?symbols are variables) and return the lazy list of its solutions: binding
@@ -64,19 +81,21 @@ only the first is computed before PROLOG returns."
                               (remove-duplicates (append (term-vars goal) binding-vars)
                                                  :from-end t)))))
     (multiple-value-bind (fn frame env)
-        (if bindings
-            (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
-            (compiled-goal goal))
+        (with-storage-guard ()
+          (if bindings
+              (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
+              (compiled-goal goal)))
       (let ((m (acquire-machine))
             (out (if out
                      (loop for sym in out collect (assoc sym env :test #'eq))
                      env))
             (state :fresh))
         ;; initial bindings; no choice point exists yet, so nothing needs trailing
-        (dolist (b bindings)
-          (unless (unify-terms m (svref frame (cdr (assoc (car b) env)))
-                               (convert-binding-value (cdr b) env frame))
-            (setf state :done)))
+        (with-storage-guard ()
+          (dolist (b bindings)
+            (unless (unify-terms m (svref frame (cdr (assoc (car b) env)))
+                                 (convert-binding-value (cdr b) env frame))
+              (setf state :done))))
         (when (eq state :done)
           (release-machine m))
         (make-lazy-list
@@ -94,6 +113,7 @@ only the first is computed before PROLOG returns."
                                              (backtrack m)))
                                   (backtrack m)))
                         (when found
+                          (check-resources m)
                           (setf found (list (solution-alist out frame env))))
                         ;; without a choice point left, no further solution exists
                         (setf finished (zerop (machine-cp-top m))))

@@ -166,5 +166,5 @@
     (is (string= (format nil "#<A MOTION~%    (TYPE DETECTING)~%    (OBJECT #<A OBJECT~%        (TYPE BOTTLE)>)>")
                  (prin1-to-string d))))
   (let ((d (desig:a location (pose "p") (arm (left right)))))
-    (is (string= (format nil "#<A LOCATION~%    (POSE \"p\")~%    (ARM (LEFT RIGHT))>")
+    (is (string= (format nil "#<A LOCATION~%    (POSE \"p\")~%    (ARM (:LEFT :RIGHT))>")
                  (prin1-to-string d)))))

@@ -116,7 +116,8 @@
     (is (not (null (coe:holds '(exe-test-occasion :here)))))
     (is (null (coe:holds '(exe-test-occasion :there))))
     (is (null (coe:holds '(cpoe:object-in-hand :bottle :left))))
-    (is (null (coe:holds '(cpoe:arms-positioned-at nil nil))))
+    ;; a declared occasion no belief layer gives rules (ARMS-POSITIONED-AT has PP-PLANS's)
+    (is (null (coe:holds '(cpoe:tool-frames-at nil nil))))
     (signals coe:occasion-functor-error (coe:holds 42))))
 
 ;;; Motions and process modules

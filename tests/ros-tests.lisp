@@ -271,7 +271,14 @@ unset), restoring the previous values afterwards."
          (box (find :box-1 markers :key (lambda (m) (getf m :name)))))
     (is (= 2 (length markers)))
     (is (eq :mesh_resource (getf bottle :type)))
-    (is (string= "package://cram_plans_resources/meshes/bottle.stl" (getf bottle :mesh-resource)))
+    ;; a file:// URI (rviz needs no ROS_PACKAGE_PATH), or package:// on request
+    (is (string= (format nil "file://~a" (namestring (repo-file "resources/meshes/bottle.stl")))
+                 (getf bottle :mesh-resource)))
+    (let ((roslisp-utilities:*marker-mesh-uris* :package))
+      (is (string= "package://cram_plans_resources/meshes/bottle.stl"
+                   (getf (find :bottle-1 (roslisp-utilities:belief-state-markers :world w)
+                               :key (lambda (m) (getf m :name)))
+                         :mesh-resource))))
     (is (equal '(1.0 0.0 0.0 1.0) (getf bottle :color)))
     (is (eq :cube (getf box :type)))
     (is (every (lambda (a b) (< (abs (- a b)) 1d-9)) '(0.1 0.2 0.3) (getf box :scale)))

@@ -349,3 +349,43 @@
       (is (< (camera-misalignment (cl-transforms:make-3d-vector 4.1 0 1.03)) 2d-2))
       (is (string-equal "MY-CEREAL1" (symbol-name (desig:desig-prop-value perceived :name))))
       (is (string= "base_link" (cl-tf:frame-id (urdf-proj:get-object-pose-in-base perceived)))))))
+
+;;; ---- navigation goals in the robot's base frame (as CRAM's projection takes them) ----------
+
+(defun count-substrings (needle text)
+  (loop for start = 0 then (+ at (length needle))
+        for at = (search needle text :start2 start)
+        while at count t))
+
+(test base-frame-navigation-goal-is-taken-as-map-coordinates
+  "A going goal in base_footprint (like the tutorial's *BASE-POSE-NEAR-COUNTER*) lands on its
+numbers in the map wherever the robot stands (the going action passes such goals on as they
+are; the seed replay of the tutorial covers it), and a warning names the frame once."
+  (with-kitchen
+    (let ((?goal (ps "base_footprint" -1.8547d0 -0.381d0 0 (/ pi -2)))
+          (urdf-proj::*warned-navigation-frames* '())
+          (first-pose nil))
+      (let ((log (with-output-to-string (cpl:*log-stream*)
+                   (urdf-proj:with-simulated-robot
+                     (exe:perform (desig:a motion (type moving-arm-joints) (left-configuration park)
+                                           (right-configuration park)))
+                     (exe:perform (desig:a motion (type going) (target (desig:a location (pose ?goal)))))
+                     (setf first-pose (btr:pose (robot)))
+                     ;; again from there: taken relative to the robot it would lead elsewhere
+                     (exe:perform (desig:a motion (type going) (pose ?goal)))))))
+        (is (pose-near first-pose *grasp-base-pose* 1d-6))
+        (is (pose-near (btr:pose (robot)) *grasp-base-pose* 1d-6))
+        (is (= 1 (count-substrings "is in the robot's base frame \"base_footprint\"" log)))))))
+
+(test respawned-object-leaves-the-gripper
+  "BTR-UTILS:SPAWN-OBJECT of an object a robot still holds (a failed run) detaches it first."
+  (with-kitchen
+    (let* ((world btr:*current-bullet-world*)
+           (bottle (btr-utils:spawn-object 'respawn-bottle :bottle :pose '((-1.6 -0.9 0.86) (0 0 0 1)))))
+      (btr:attach-object (robot) bottle :link "r_gripper_tool_frame")
+      (is (btr:object-attached (robot) bottle))
+      (btr-utils:spawn-object 'respawn-bottle :bottle :pose '((-1.6 -0.9 0.86) (0 0 0 1)))
+      (is (null (btr:object-attached (robot) bottle)))
+      (btr:simulate world 5)
+      (is (< (abs (- (cl-transforms:x (cl-transforms:origin (btr:pose bottle))) -1.6d0)) 0.02))
+      (btr-utils:kill-object 'respawn-bottle))))

@@ -9,6 +9,7 @@
     (asdf:load-asd (merge-pathnames "cram-plans.asd" root))
     (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
     (asdf:load-system "cram-plans/cram-pepper-demo")
+    (asdf:load-system "cram-plans/replay")   ; runs recorded; --out writes replay.html
     (asdf:load-system "yason")
     (require :sb-posix)))
 

@@ -18,7 +18,26 @@
   "usage: cram-plans-run [--demo move-bottle|switch-bottles|pepper] [--seed N]
                       [--bottle-pose x,y,z[,yaw]] [--input \"1 1\"] [--out DIR] [--quiet]
        cram-plans-run --batch N [--seed N] [--jobs J] [--shard I/N] [--results FILE]
-       cram-plans-run --summary FILE...")
+                      [--memory-every K]
+       cram-plans-run --summary FILE...
+       cram-plans-run --help
+
+Single runs (default: --demo move-bottle, bottle in view):
+  --demo NAME         move-bottle, switch-bottles or pepper
+  --seed N            seed of every random choice (default 1)
+  --bottle-pose P     move-bottle's bottle at x,y,z[,yaw] (metres, radians)
+  --input TEXT        what the pepper demo reads from the user (default \"2\")
+  --out DIR           write the log's pictures, start/grasped/placed.png and the task tree
+  --quiet             no log on standard output
+Batch campaigns of randomized move-bottle runs (one JSON line per run, in index order):
+  --batch N           N runs; the same seed gives the same runs however they are split
+  --jobs J            worker processes (default 2); a worker that dies is reported with its
+                      exit status and last output, and its lost runs are re-run
+  --shard I/N         only every N-th run starting at run I (for job arrays)
+  --results FILE      where the JSON lines go (default batch-SEED.jsonl)
+  --memory-every K    each worker reports its RSS and Lisp heap every K runs
+  --summary FILE...   success rate and histograms of JSON lines files (merged shards)
+Exit status: 0 success, 1 plan failure, 2 bad options.")
 
 (defun parse-integer-option (option value &key (min 0))
   (let ((n (and value (ignore-errors (parse-integer value)))))
@@ -58,6 +77,9 @@
                        ((string= option "--batch") (setf (getf options :batch) (parse-integer-option option (value) :min 1)))
                        ((string= option "--jobs") (setf (getf options :jobs) (parse-integer-option option (value) :min 1)))
                        ((string= option "--results") (setf (getf options :results) (value)))
+                       ((string= option "--memory-every")
+                        (setf (getf options :memory-every) (parse-integer-option option (value) :min 1)))
+                       ((member option '("--help" "-h") :test #'string=) (setf (getf options :help) t))
                        ((string= option "--shard")
                         (let* ((v (value)) (slash (position #\/ v))
                                (i (and slash (ignore-errors (parse-integer v :end slash))))
@@ -68,7 +90,7 @@
                        ((string= option "--summary")
                         (setf (getf options :summary) (or args (usage-fail "--summary needs JSON lines files"))
                               args nil))
-                       (t (usage-fail "unknown option ~s~%~a" option *usage*))))))
+                       (t (usage-fail "unknown option ~s (cram-plans-run --help lists the options)" option))))))
     options))
 
 ;;; ---- seeds and poses ---------------------------------------------------------------------------
@@ -93,6 +115,10 @@ any yaw), drawn from SEED."
 
 ;;; ---- one batch run -------------------------------------------------------------------------------
 
+(defparameter *recovery-keys*
+  '("look_direction" "new_grasp" "new_arm" "grasp_failure" "perception_failure")
+  "The JSON keys of the recovery and failure counts of a run.")
+
 (defun run-record (campaign-seed index)
   "Run move-bottle number INDEX of the campaign CAMPAIGN-SEED; a hash table for one JSON line."
   (let ((seed (run-seed campaign-seed index)))
@@ -108,10 +134,25 @@ any yaw), drawn from SEED."
               (gethash "seconds" record) (getf result :seconds)
               (gethash "error" record) (let ((e (getf result :error)))
                                          (and e (first-line e))))
-        (dolist (key '(:look-direction :new-grasp :new-arm :grasp-failure :perception-failure))
-          (setf (gethash (string-downcase (substitute #\_ #\- (symbol-name key))) record)
-                (getf result key)))
+        (loop for key in '(:look-direction :new-grasp :new-arm :grasp-failure :perception-failure)
+              for name in *recovery-keys*
+              do (setf (gethash name record) (getf result key)))
         record))))
+
+(defun failure-record (campaign-seed index message)
+  "The record of run INDEX of the campaign CAMPAIGN-SEED when the run could not end by itself
+(an error outside the plan, or its worker died): not a success, MESSAGE as the error."
+  (let ((seed (run-seed campaign-seed index))
+        (record (make-hash-table :test 'equal)))
+    (setf (gethash "index" record) index
+          (gethash "seed" record) seed
+          (gethash "pose" record) (nth-value 1 (random-bottle-pose seed))
+          (gethash "success" record) nil
+          (gethash "distance" record) nil
+          (gethash "seconds" record) 0
+          (gethash "error" record) message)
+    (dolist (key *recovery-keys*) (setf (gethash key record) 0))
+    record))
 
 (defun first-line (text)
   (subseq text 0 (or (position #\Newline text) (length text))))
@@ -120,35 +161,228 @@ any yaw), drawn from SEED."
   (with-output-to-string (s)
     (yason:encode record s)))
 
-(defun worker (campaign-seed indices path)
-  "Run the campaign runs INDICES, appending one JSON line per run to PATH."
-  (with-open-file (out path :direction :output :if-exists :append :if-does-not-exist :create)
-    (dolist (i indices)
-      (write-line (record->json (run-record campaign-seed i)) out)
-      (finish-output out)))
+;;; ---- workers --------------------------------------------------------------------------------------
+
+(defun rss-megabytes (&optional (pid "self"))
+  "The resident set size of the process PID (default: this one) in MB, or NIL when unknown."
+  (with-open-file (s (format nil "/proc/~a/status" pid) :if-does-not-exist nil)
+    (and s (loop for l = (read-line s nil) while l
+                 when (and (> (length l) 6) (string= "VmRSS:" l :end2 6))
+                   return (/ (* 1024 (parse-integer l :start 6 :junk-allowed t)) 1d6)))))
+
+(defun memory-sample (slot generation runs)
+  "A hash table: this worker's RSS and Lisp heap in use (MB) after a full collection, after
+RUNS runs."
+  (sb-ext:gc :full t)
+  (let ((h (make-hash-table :test 'equal)))
+    (setf (gethash "worker" h) slot
+          (gethash "generation" h) generation
+          (gethash "runs" h) runs
+          (gethash "rss_mb" h) (rss-megabytes)
+          (gethash "heap_mb" h) (/ (sb-kernel:dynamic-usage) 1d6))
+    h))
+
+(defun test-kill-hook (index generation)
+  "Test hook: when the environment variable CRAM_PLANS_RUN_TEST_KILL is INDEX, the first worker
+(generation 0) that is about to run INDEX kills itself with SIGKILL; INDEX:always kills every
+worker that reaches it. A line on standard output announces it."
+  (let* ((spec (uiop:getenv "CRAM_PLANS_RUN_TEST_KILL"))
+         (colon (and spec (position #\: spec)))
+         (at (and spec (ignore-errors (parse-integer spec :end colon)))))
+    (when (and at (= at index)
+               (or (zerop generation) (and colon (string= "always" (subseq spec (1+ colon))))))
+      (format t "~&test hook: worker generation ~d kills itself (SIGKILL) before run ~d~%"
+              generation index)
+      (finish-output)
+      (sb-posix:kill (sb-posix:getpid) sb-posix:sigkill))))
+
+(defun read-indices (path)
+  (with-open-file (s path)
+    (with-standard-io-syntax
+      (let ((*read-eval* nil)) (read s)))))
+
+(defun worker (campaign-seed indices-file results-file
+               &key (slot 0) (generation 0) memory-every memory-file)
+  "The body of one worker process: run the campaign runs listed in INDICES-FILE in order,
+appending one JSON line per run to RESULTS-FILE (a run that signals outside the plan is
+recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0."
+  (with-open-file (out results-file :direction :output :if-exists :append :if-does-not-exist :create)
+    (loop for i in (read-indices indices-file)
+          for done from 1
+          do (test-kill-hook i generation)
+             (let ((record (handler-case (run-record campaign-seed i)
+                             ((or error storage-condition) (e)
+                               (failure-record campaign-seed i
+                                               (or (ignore-errors (first-line (princ-to-string e)))
+                                                   (string (type-of e))))))))
+               (write-line (record->json record) out)
+               (finish-output out))
+             (when (and memory-every memory-file (zerop (mod done memory-every)))
+               (with-open-file (m memory-file :direction :output :if-exists :append
+                                              :if-does-not-exist :create)
+                 (write-line (record->json (memory-sample slot generation done)) m)))))
   (uiop:quit 0))
 
-;;; ---- campaigns -----------------------------------------------------------------------------------
+;;; ---- the campaign supervisor ------------------------------------------------------------------------
+
+(defstruct (worker-slot (:conc-name slot-))
+  "One worker position of a campaign and the process that currently fills it."
+  id (generation 0) process indices results log memory
+  (results-offset 0) (memory-offset 0) (stalls 0) finished)
 
 (defun shard-indices (n shard)
   "The run indices 0…N-1 of SHARD (I . COUNT): every COUNT-th index starting at I-1."
   (destructuring-bind (i . count) (or shard '(1 . 1))
     (loop for k from (1- i) below n by count collect k)))
 
-(defun count-lines-of (path)
-  (if (probe-file path)
-      (with-open-file (s path) (loop for line = (read-line s nil) while line count t))
-      0))
+(defun read-new-lines (path offset)
+  "The complete lines appended to the file PATH after byte OFFSET, and the offset after the last
+of them (a line still being written is left for the next call)."
+  (with-open-file (s path :element-type '(unsigned-byte 8) :if-does-not-exist nil)
+    (let ((length (if s (file-length s) 0)))
+      (if (<= length offset)
+          (values '() offset)
+          (let ((bytes (make-array (- length offset) :element-type '(unsigned-byte 8))))
+            (file-position s offset)
+            (let* ((n (read-sequence bytes s))
+                   (end (position 10 bytes :end n :from-end t)))
+              (if end
+                  (values (remove "" (uiop:split-string
+                                      (sb-ext:octets-to-string bytes :end end
+                                                                     :external-format '(:utf-8 :replacement #\?))
+                                      :separator '(#\Newline))
+                                  :test #'string=)
+                          (+ offset end 1))
+                  (values '() offset))))))))
 
-(defun progress-bar (done total)
+(defun output-tail (path &key (lines 15) (bytes 8192))
+  "The last LINES lines of the file PATH (from its last BYTES bytes)."
+  (with-open-file (s path :element-type '(unsigned-byte 8) :if-does-not-exist nil)
+    (when s
+      (let* ((start (max 0 (- (file-length s) bytes)))
+             (buffer (make-array (- (file-length s) start) :element-type '(unsigned-byte 8))))
+        (file-position s start)
+        (read-sequence buffer s)
+        (let ((all (remove-if (lambda (l) (zerop (length (string-trim " " l))))
+                              (uiop:split-string (sb-ext:octets-to-string
+                                                  buffer :external-format '(:utf-8 :replacement #\?))
+                                                 :separator '(#\Newline)))))
+          (last all lines))))))
+
+(defun exit-description (process)
+  "How the worker PROCESS ended, for a person: its exit status or the signal that killed it."
+  (let ((code (sb-ext:process-exit-code process)))
+    (case (sb-ext:process-status process)
+      (:exited (format nil "exited with status ~d" code))
+      (:signaled (format nil "was killed by signal ~d~@[ (~a)~]" code
+                         (cdr (assoc code '((1 . "SIGHUP") (2 . "SIGINT") (4 . "SIGILL") (6 . "SIGABRT")
+                                            (7 . "SIGBUS") (8 . "SIGFPE") (9 . "SIGKILL")
+                                            (11 . "SIGSEGV") (15 . "SIGTERM"))))))
+      (t (format nil "ended (~(~a~) ~a)" (sb-ext:process-status process) code)))))
+
+(defun launch-worker (slot indices seed tmp memory-every)
+  "Start the next process of SLOT on the run INDICES, its files in the directory TMP."
+  (let ((base (format nil "worker-~d-~d" (slot-id slot) (slot-generation slot)))
+        (demo (namestring (merge-pathnames "demo.lisp" *tools-directory*))))
+    (flet ((file (type) (namestring (merge-pathnames (format nil "~a.~a" base type) tmp))))
+      (with-open-file (s (file "indices") :direction :output :if-exists :supersede)
+        (with-standard-io-syntax (prin1 indices s)))
+      (setf (slot-indices slot) indices
+            (slot-results slot) (file "jsonl") (slot-log slot) (file "log") (slot-memory slot) (file "memory")
+            (slot-results-offset slot) 0 (slot-memory-offset slot) 0
+            (slot-process slot)
+            (sb-ext:run-program
+             "sbcl" (list "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
+                          "--eval" "(require :asdf)" "--load" demo
+                          "--eval" (format nil "(cram-plans-demo::worker ~d ~s ~s :slot ~d :generation ~d ~
+                                                :memory-every ~s :memory-file ~s)"
+                                           seed (file "indices") (file "jsonl") (slot-id slot)
+                                           (slot-generation slot) memory-every (file "memory")))
+             :search t :wait nil :input nil :output (file "log") :if-output-exists :supersede
+             :error :output :environment (worker-environment))))))
+
+(defun worker-environment ()
+  "The environment of a worker process: this one's, with the browser viewer off (a worker has
+nobody to show it to) unless CRAM_PLANS_VIEWER is set."
+  (let ((env (sb-ext:posix-environ)))
+    (if (uiop:getenv "CRAM_PLANS_VIEWER") env (cons "CRAM_PLANS_VIEWER=0" env))))
+
+(defvar *max-stalls* 4
+  "A campaign stops with an error when the processes of one worker slot die this many times in a
+row without finishing a single run (the workers cannot work at all).")
+
+(defun collect-slot (slot lines samples stream)
+  "Take the new result lines of SLOT into the table LINES (index → line; the first line of an
+index wins) and its new memory samples into the list in the cons SAMPLES, printing them."
+  (multiple-value-bind (new offset) (read-new-lines (slot-results slot) (slot-results-offset slot))
+    (setf (slot-results-offset slot) offset)
+    (dolist (line new)
+      (let* ((record (ignore-errors (yason:parse line)))
+             (index (and (hash-table-p record) (gethash "index" record))))
+        (when (and (integerp index) (not (gethash index lines)))
+          (setf (gethash index lines) line)))))
+  (multiple-value-bind (new offset) (read-new-lines (slot-memory slot) (slot-memory-offset slot))
+    (setf (slot-memory-offset slot) offset)
+    (dolist (line new)
+      (let ((sample (ignore-errors (yason:parse line))))
+        (when (hash-table-p sample)
+          (push sample (car samples))
+          (format stream "~&memory: worker ~d~:[~*~; (restart ~d)~]: ~6d runs, RSS ~7,1f MB, Lisp heap ~6,1f MB~%"
+                  (gethash "worker" sample) (plusp (gethash "generation" sample))
+                  (gethash "generation" sample) (gethash "runs" sample)
+                  (or (gethash "rss_mb" sample) 0) (gethash "heap_mb" sample)))))))
+
+(defun settle-slot (slot lines seed tmp memory-every stream)
+  "SLOT's process has ended: finish the slot, or report the death of its worker and start a
+new one on the runs it lost. A run that two workers in a row died on is recorded as a failure.
+Returns a plist describing the death, or NIL."
+  (let* ((process (slot-process slot))
+         (remaining (remove-if (lambda (i) (gethash i lines)) (slot-indices slot)))
+         (ran (- (length (slot-indices slot)) (length remaining))))
+    (sb-ext:process-close process)
+    (if (and (null remaining) (eql 0 (sb-ext:process-exit-code process))
+             (eq :exited (sb-ext:process-status process)))
+        (progn (setf (slot-finished slot) t) nil)
+        (let ((how (exit-description process))
+              (tail (output-tail (slot-log slot))))
+          (format stream "~&batch: worker ~d (pid ~d) ~a after ~d of its ~d runs~:[~;, before run ~:*~d~]~%~
+                          ~:[  (it printed nothing)~%~;~:*~{  | ~a~%~}~]"
+                  (slot-id slot) (sb-ext:process-pid process) how ran (length (slot-indices slot))
+                  (first remaining) tail)
+          (if (zerop ran) (incf (slot-stalls slot)) (setf (slot-stalls slot) 0))
+          (when (>= (slot-stalls slot) *max-stalls*)
+            (error "batch: worker ~d died ~d times in a row without finishing a run; the last one ~a.~
+                    ~%Its last output:~%~{  | ~a~%~}" (slot-id slot) (slot-stalls slot) how tail))
+          (let ((given-up nil))
+            (when (and remaining (plusp (slot-generation slot)) (zerop ran))
+              ;; the previous process of this slot died at the same run: do not try it a third time
+              (setf given-up (pop remaining))
+              (setf (gethash given-up lines)
+                    (record->json (failure-record seed given-up
+                                                  (format nil "two workers died running this run (the last ~a)" how))))
+              (format stream "batch: run ~d killed two workers; it is recorded as a failure~%" given-up))
+            (incf (slot-generation slot))
+            (if remaining
+                (progn (format stream "batch: restarting worker ~d on the ~d runs it lost~%"
+                               (slot-id slot) (length remaining))
+                       (launch-worker slot remaining seed tmp memory-every))
+                (setf (slot-finished slot) t))
+            (list :worker (slot-id slot) :pid (sb-ext:process-pid process) :how how
+                  :lost (if given-up (cons given-up remaining) remaining) :given-up given-up :tail tail))))))
+
+(defun progress-bar (done total &optional (stream *error-output*))
   (let* ((width 40) (filled (if (zerop total) width (floor (* width done) total))))
-    (format *error-output* "~c[~a~a] ~d/~d" #\Return (make-string filled :initial-element #\#)
+    (format stream "~c[~a~a] ~d/~d" #\Return (make-string filled :initial-element #\#)
             (make-string (- width filled) :initial-element #\.) done total)
-    (finish-output *error-output*)))
+    (finish-output stream)))
 
-(defun run-batch (n &key (seed 1) (jobs 2) shard results)
-  "Run the runs of SHARD (default: all N) of the campaign SEED in JOBS worker processes, write
-their JSON lines in index order to RESULTS (default batch-SEED.jsonl) and return the path."
+(defun run-batch (n &key (seed 1) (jobs 2) shard results memory-every (stream *error-output*))
+  "Run the runs of SHARD (default: all N) of the campaign SEED in JOBS worker processes and
+write their JSON lines in index order to RESULTS (default batch-SEED.jsonl), every index once.
+A worker that dies is reported on STREAM with its exit status and the tail of its output, and a
+new worker re-runs the runs it lost. With MEMORY-EVERY, each worker reports its RSS and heap
+every MEMORY-EVERY runs. Returns the path, the memory samples (hash tables: worker,
+generation, runs, rss_mb, heap_mb) and the deaths (plists)."
   (let* ((indices (shard-indices n shard))
          (results (or results (format nil "batch-~d~@[-~{~d-of-~d~}~].jsonl" seed
                                       (and shard (list (car shard) (cdr shard))))))
@@ -156,38 +390,58 @@ their JSON lines in index order to RESULTS (default batch-SEED.jsonl) and return
                (format nil "~a/cram-plans-batch-~d-~d" (string-right-trim "/" (namestring (uiop:temporary-directory)))
                        (sb-posix:getpid) (get-universal-time))))
          (jobs (max 1 (min jobs (length indices))))
-         (slices (loop for j below jobs
-                       collect (loop for k in indices for pos from 0
-                                     when (= (mod pos jobs) j) collect k)))
-         (files (loop for j below jobs collect (merge-pathnames (format nil "worker-~d.jsonl" j) tmp)))
-         (demo (namestring (merge-pathnames "demo.lisp" *tools-directory*))))
+         (slots (loop for j below jobs collect (make-worker-slot :id j)))
+         (lines (make-hash-table))
+         (samples (list '()))
+         (deaths '()))
     (ensure-directories-exist tmp)
-    (let ((processes
-            (loop for slice in slices for file in files
-                  collect (uiop:launch-program
-                           (list "sbcl" "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
-                                 "--eval" "(require :asdf)" "--load" demo
-                                 "--eval" (format nil "(cram-plans-demo::worker ~d '~s ~s)"
-                                                  seed slice (namestring file)))
-                           :output nil :error-output nil))))
-      (loop with shown = -1
-            for done = (reduce #'+ (mapcar #'count-lines-of files))
-            do (unless (= done shown) (progress-bar done (length indices)) (setf shown done))
-            while (some #'uiop:process-alive-p processes)
-            do (sleep 0.5))
-      (progress-bar (reduce #'+ (mapcar #'count-lines-of files)) (length indices))
-      (terpri *error-output*)
-      (mapc #'uiop:wait-process processes))
-    (let ((lines (sort (loop for f in files
-                             append (with-open-file (s f :if-does-not-exist nil)
-                                      (and s (loop for l = (read-line s nil) while l collect l))))
-                       #'< :key (lambda (l) (gethash "index" (yason:parse l))))))
-      (with-open-file (out results :direction :output :if-exists :supersede)
-        (dolist (l lines) (write-line l out)))
-      (uiop:delete-directory-tree tmp :validate t :if-does-not-exist :ignore)
-      (unless (= (length lines) (length indices))
-        (error "batch: ~d of ~d runs reported a result (a worker died)" (length lines) (length indices)))
-      results)))
+    (unwind-protect
+         (progn
+           (loop for slot in slots for j from 0
+                 do (launch-worker slot (loop for k in indices for pos from 0
+                                              when (= (mod pos jobs) j) collect k)
+                                   seed tmp memory-every))
+           (loop with shown = -1
+                 for active = (remove-if #'slot-finished slots)
+                 while active
+                 do (dolist (slot active)
+                      (let ((alive (sb-ext:process-alive-p (slot-process slot))))
+                        (collect-slot slot lines samples stream)
+                        (unless alive
+                          (let ((death (settle-slot slot lines seed tmp memory-every stream)))
+                            (when death (push death deaths))))))
+                    (let ((percent (floor (* 100 (hash-table-count lines)) (max 1 (length indices)))))
+                      (unless (= shown percent) ; at most 100 redraws, also in a log file
+                        (setf shown percent)
+                        (progress-bar (hash-table-count lines) (length indices) stream)))
+                    (sleep 0.3))
+           (progress-bar (hash-table-count lines) (length indices) stream)
+           (terpri stream))
+      (dolist (slot slots)
+        (let ((p (slot-process slot)))
+          (when (and p (sb-ext:process-alive-p p))
+            (sb-ext:process-kill p sb-posix:sigterm)
+            (sb-ext:process-wait p)
+            (sb-ext:process-close p))))
+      (uiop:delete-directory-tree tmp :validate t :if-does-not-exist :ignore))
+    (let ((missing (remove-if (lambda (i) (gethash i lines)) indices)))
+      (when missing
+        (error "batch: ~d of ~d runs reported no result (first missing: ~d)"
+               (length missing) (length indices) (first missing))))
+    (with-open-file (out results :direction :output :if-exists :supersede)
+      (dolist (i indices) (write-line (gethash i lines) out)))
+    (when deaths
+      (let ((given-up (remove nil (mapcar (lambda (d) (getf d :given-up)) deaths)))
+            (lost (make-hash-table)))
+        (dolist (d deaths) (dolist (i (getf d :lost)) (setf (gethash i lost) t)))
+        (dolist (i given-up) (remhash i lost))
+        (format stream "batch: ~d worker~:p died; ~d lost run~:p ran again in new workers"
+                (length deaths) (hash-table-count lost))
+        (when given-up
+          (format stream "; ~d run~:p that killed two workers ~:[are~;is~] recorded as failed: ~{~d~^, ~}"
+                  (length given-up) (= 1 (length given-up)) given-up))
+        (format stream "; all ~d runs reported~%" (length indices))))
+    (values results (reverse (car samples)) (reverse deaths))))
 
 (defun read-json-lines (paths)
   "Every record (hash table) in the JSON lines files PATHS."
@@ -213,7 +467,7 @@ success rate."
       (let ((times (sort (mapcar (lambda (r) (gethash "seconds" r)) records) #'<)))
         (format stream "time per run: median ~,3f s, max ~,3f s~%" (nth (floor n 2) times) (car (last times)))))
     (format stream "recoveries (runs with at least one / total):~%")
-    (dolist (key '("look_direction" "new_grasp" "new_arm" "grasp_failure" "perception_failure"))
+    (dolist (key *recovery-keys*)
       (let ((runs (count-if (lambda (r) (plusp (or (gethash key r) 0))) records))
             (total (reduce #'+ records :key (lambda (r) (or (gethash key r) 0)))))
         (format stream "  ~20a ~5d / ~5d  ~a~%" key runs total
@@ -239,7 +493,8 @@ success rate."
                                               :out-dir dir :pictures (and dir t) :log-stream log))))
                (when dir
                  (btr:png-snapshot (merge-pathnames "placed.png" dir) :look-at '(-0.8 2.0 0.9))
-                 (ignore-errors (write-task-tree dir)))
+                 (ignore-errors (write-task-tree dir))
+                 (format t "~&replay: ~a~%" (cram-viewer:write-replay dir)))
                (format t "~&~:[FAILURE~;SUCCESS~]: bottle ~@[~,3f m~] from the destination~@[; error: ~a~]~%"
                        (getf result :success) (getf result :distance) (getf result :error))
                (getf result :success)))
@@ -260,14 +515,18 @@ success rate."
 2 on bad options."
   (let ((code (handler-case
                   (let ((options (parse-options args)))
-                    (cond ((getf options :summary)
+                    (cond ((getf options :help)
+                           (format t "~a~%" *usage*)
+                           0)
+                          ((getf options :summary)
                            (summarize (read-json-lines (getf options :summary)))
                            0)
                           ((getf options :batch)
                            (let ((path (run-batch (getf options :batch) :seed (getf options :seed)
                                                                         :jobs (getf options :jobs)
                                                                         :shard (getf options :shard)
-                                                                        :results (getf options :results))))
+                                                                        :results (getf options :results)
+                                                                        :memory-every (getf options :memory-every))))
                              (format t "~&results: ~a~%" path)
                              (summarize (read-json-lines (list path)))
                              0))

@@ -27,6 +27,9 @@
                             (merge-pathnames (uiop:ensure-directory-pathname name)
                                              (uiop:ensure-directory-pathname root))))
             when dir return dir)
+      ;; deeper in a workspace on ROS_PACKAGE_PATH, as rospack finds it (ROS-LOAD's crawl)
+      (let ((crawl (find-symbol "ROS-PACKAGE-DIRECTORY" :ros-load-manifest)))
+        (and crawl (fboundp crawl) (funcall crawl name)))
       (btr-fail "ROS package ~s not found: register it with BTR:REGISTER-ROS-PACKAGE or put it on ROS_PACKAGE_PATH" name)))
 
 (defun resolve-uri (uri)

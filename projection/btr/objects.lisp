@@ -100,14 +100,37 @@ or (x y z) (identity orientation)."
 (defgeneric pose (object)
   (:documentation "The pose of OBJECT in the world frame (for a rigid body of a link, the link's)."))
 
+(defun object-gone-error (object where)
+  "Signal a BTR-ERROR naming OBJECT when it was removed from its world or its world destroyed."
+  (let ((world (world object)))
+    (cond ((not (native:world-alive-p (world-handle world)))
+           (btr-fail "~a: the world of object ~s has been destroyed (DESTROY-WORLD)" where (name object)))
+          ((not (eq (object world (name object)) object))
+           (btr-fail "~a: object ~s has been removed from its world (REMOVE-OBJECT)" where (name object))))))
+
+(defmacro with-live-object ((object where) &body body)
+  "Run BODY, a native call on OBJECT; when it fails because OBJECT or its world is gone, signal
+an error naming OBJECT instead of its handle."
+  `(handler-case (progn ,@body)
+     (native:native-error (e)
+       (object-gone-error ,object ,where)
+       (error e))))
+
 (defmethod pose ((o object))
-  (vector->pose (native:object-pose (whandle o) (object-handle o))))
+  (vector->pose (with-live-object (o 'pose) (native:object-pose (whandle o) (object-handle o)))))
+
+(defmethod pose ((x t))
+  (btr-fail "POSE: expected an object of a Bullet world (see BTR:OBJECT), got ~s" x))
+
+(defmethod world ((x t))
+  (btr-fail "expected an object of a Bullet world (see BTR:OBJECT), got ~s" x))
 
 (defgeneric (setf pose) (new-pose object)
   (:documentation "Teleport OBJECT to NEW-POSE; rigidly attached objects follow."))
 
 (defmethod (setf pose) (new-pose (o object))
-  (native:set-object-pose (whandle o) (object-handle o) (pose->vector new-pose (format nil "pose of ~s" (name o))))
+  (let ((v (pose->vector new-pose (format nil "pose of ~s" (name o)))))
+    (with-live-object (o '(setf pose)) (native:set-object-pose (whandle o) (object-handle o) v)))
   new-pose)
 
 (defun object-pose (name &optional (world *current-bullet-world*))
@@ -127,7 +150,8 @@ or (x y z) (identity orientation)."
 
 (defun aabb (object &optional link)
   "Axis-aligned bounding box of OBJECT (or its LINK index) as (values min-vector max-vector)."
-  (let ((b (native:object-aabb (whandle object) (object-handle object) (or link -1))))
+  (let ((b (with-live-object (object 'aabb)
+             (native:object-aabb (whandle object) (object-handle object) (or link -1)))))
     (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
             (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
 
@@ -162,11 +186,37 @@ group and mask, color, types) are rejected by ADD-OBJECT with an error naming th
   "The keys ADD-OBJECT accepts for KIND."
   (append (car (gethash kind *object-kinds*)) *common-keys*))
 
-(defgeneric add-object (world type name pose &rest keys &key &allow-other-keys)
+(defgeneric add-object (world type name pose &rest keys)
   (:documentation "Add an object of TYPE (:static-plane :box :colored-box :sphere :cylinder :cone
-:mesh :urdf :point-cloud ...) called NAME at POSE to WORLD and return it. Unknown keys are an error."))
+:mesh :urdf :point-cloud ...) called NAME at POSE to WORLD and return it. KEYS is a list of
+keywords and values; unknown keys are an error. :TYPES is a list of item types (a single
+symbol or string is taken as a one-element list; strings become keywords)."))
 
-(defmethod add-object ((world bt-reasoning-world) type name pose &rest keys &key &allow-other-keys)
+(defmethod add-object (world type name pose &rest keys)
+  (declare (ignore type name pose keys))
+  (check-world world 'add-object))
+
+(defun normalize-item-types (types)
+  "The :TYPES argument of ADD-OBJECT as a list of symbols; strings become keywords."
+  (flet ((one (x)
+           (cond ((and x (symbolp x)) x)
+                 ((and (stringp x) (plusp (length x))) (intern (string-upcase x) :keyword))
+                 (t (btr-fail "ADD-OBJECT: item type ~s in :types ~s, expected a symbol or string"
+                              x types)))))
+    (if (and (listp types) (alexandria:proper-list-p types))
+        (mapcar #'one types)
+        (list (one types)))))
+
+(defmethod add-object ((world bt-reasoning-world) type name pose &rest keys)
+  (check-world world 'add-object)
+  (unless (evenp (length keys))
+    (btr-fail "ADD-OBJECT ~s: odd number of keyword arguments ~s, expected :key value pairs" name keys))
+  (loop for k in keys by #'cddr
+        unless (keywordp k)
+          do (btr-fail "ADD-OBJECT ~s: ~s in ~s is not a keyword, expected :key value pairs" name k keys))
+  (when (getf keys :types)
+    (setf keys (copy-list keys))
+    (setf (getf keys :types) (normalize-item-types (getf keys :types))))
   (let ((entry (gethash type *object-kinds*)))
     (unless entry
       (btr-fail "ADD-OBJECT: object type ~s is unknown, expected one of ~{~s~^ ~}"

@@ -26,6 +26,9 @@
    #:item-type #:item-types #:object-type #:aabb #:bounding-box #:object-color
    #:collision-group-bits #:*mesh-files* #:add-objects-to-mesh-list #:register-ros-package
    #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
+   ;; the costmap visualization
+   #:add-costmap-function-object #:add-costmap-sample-object #:add-vis-axis-object
+   #:costmap-vis-object #:clear-costmap-vis-object
    ;; robots and environments
    #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states
    #:set-robot-state-from-joints #:joint-limits #:joint-lower-limit #:joint-upper-limit

@@ -7,8 +7,11 @@
 (defvar *snapshot-directory* nil
   "Directory where DEBUG-WINDOW and SNAPSHOT write PNG pictures in headless runs; NIL: none.")
 
-(defvar *debug-snapshots* '()
-  "Worlds with an open (headless) debug window: SNAPSHOT records pictures of them.")
+(defvar *debug-snapshots* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "The worlds with an open (headless) debug window, as the keys of a weak hash table: SNAPSHOT
+records pictures of them. A world no one else holds leaves it (it is collected as usual), and
+a world whose native world was destroyed is dropped from it, so replacing the belief state
+run after run keeps nothing.")
 
 (defvar *snapshot-counter* 0 "Number of the next snapshot file.")
 
@@ -57,17 +60,37 @@ the depth and segmentation buffers (see CRAM-NATIVE:RENDER)."
   (native:render (world-handle world) (pose->vector camera-pose "camera pose")
                  :width width :height height :fov fov :depth depth :segmentation segmentation))
 
+(defvar *debug-window-hook* nil
+  "NIL or a function of the world that DEBUG-WINDOW calls: the browser viewer (cram-plans/viewer)
+is started from here, as the window when there is no display.")
+
 (defun debug-window (&optional (world *current-bullet-world*))
   "Headless stand-in for CRAM's debug window: from now on SNAPSHOT records pictures of WORLD
-into *SNAPSHOT-DIRECTORY* (when set); a first picture is written at once."
-  (pushnew world *debug-snapshots*)
+into *SNAPSHOT-DIRECTORY* (when set); a first picture is written at once. *DEBUG-WINDOW-HOOK*
+then starts the browser viewer on WORLD and prints its URL."
+  (unless (typep world 'bt-world)
+    (btr-fail "DEBUG-WINDOW: ~s is not a Bullet world" world))
+  (forget-destroyed-debug-windows)
+  (setf (gethash world *debug-snapshots*) t)
   (snapshot "debug-window" world)
+  (when *debug-window-hook* (funcall *debug-window-hook* world))
   world)
+
+(defun %world-live-p (world)
+  "True when the native world of WORLD has not been destroyed."
+  (native:world-alive-p (world-handle world)))
+
+(defun forget-destroyed-debug-windows ()
+  "Drop the worlds whose native world is gone from *DEBUG-SNAPSHOTS*."
+  (let ((dead '()))
+    (maphash (lambda (w v) (declare (ignore v)) (unless (%world-live-p w) (push w dead)))
+             *debug-snapshots*)
+    (dolist (w dead) (remhash w *debug-snapshots*))))
 
 (defun snapshot (label &optional (world *current-bullet-world*))
   "Write a picture of WORLD named NNN-LABEL.png to *SNAPSHOT-DIRECTORY* when WORLD has a debug
 window and the directory is set. Returns the path or NIL."
-  (when (and *snapshot-directory* (member world *debug-snapshots*))
+  (when (and *snapshot-directory* (gethash world *debug-snapshots*) (%world-live-p world))
     (let ((path (merge-pathnames (format nil "~3,'0d-~a.png" (incf *snapshot-counter*)
                                          (substitute-if #\- (lambda (c) (not (or (alphanumericp c) (char= c #\-)))) (string-downcase label)))
                                  (uiop:ensure-directory-pathname *snapshot-directory*))))

@@ -17,6 +17,10 @@
 
 (defun robot-object-p (object) "True for articulated objects." (typep object 'robot-object))
 
+(defmethod %model ((x t))
+  (btr-fail "~a is not an articulated object (a robot or other URDF object): it has no links or joints"
+            (if (typep x 'object) (format nil "object ~s" (name x)) (format nil "~s" x))))
+
 (defun urdf (robot) "The CL-URDF:ROBOT model of ROBOT." (km-urdf (%model robot)))
 
 (defun link-names (robot) "The link names of ROBOT (URDF order)." (coerce (km-link-names (%model robot)) 'list))
@@ -75,6 +79,19 @@ is not meaningful here, they return (values nil nil)."
 (defun joint-lower-limit (robot joint) "Lower limit of JOINT." (nth-value 0 (joint-limits robot joint)))
 (defun joint-upper-limit (robot joint) "Upper limit of JOINT." (nth-value 1 (joint-limits robot joint)))
 
+(defun clamp-to-joint-limits (robot joint value)
+  "VALUE (a double float) of JOINT of ROBOT, clamped into the joint's limits with a warning
+when it lies beyond them by more than 1e-6 (as CRAM does); joints without limits keep it."
+  (multiple-value-bind (lower upper) (ignore-errors (joint-limits robot joint))
+    (if (and (realp lower) (realp upper) (< lower upper)
+             (or (< value lower) (> value upper)))
+        (let ((clamped (to-double (max lower (min upper value)))))
+          (when (> (abs (- clamped value)) 1d-6)
+            (warn "Joint ~s of ~s: value ~s is beyond its limits [~s, ~s]; set to ~s."
+                  joint (name robot) value lower upper clamped))
+          clamped)
+        value)))
+
 (defun set-robot-state-from-joints (joint-states robot)
   "Set joints of ROBOT from JOINT-STATES: a list of (name value) or (name . value), or a hash
 table name → value. All joints are set at once, then links and attached objects move once."
@@ -91,10 +108,10 @@ table name → value. All joints are set at once, then links and attached object
           (values (make-array (length pairs) :element-type 'double-float)))
       (loop for (n . v) in pairs for i from 0
             do (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
-               (unless (and (realp v) (< (abs v) 1d6))
+               (unless (and (finite-real-p v) (< (abs v) 1d6))
                  (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
                (setf (aref indices i) (joint-index robot n)
-                     (aref values i) (to-double v)))
+                     (aref values i) (clamp-to-joint-limits robot n (to-double v))))
       (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
       robot)))
 
@@ -145,10 +162,11 @@ table name → value. All joints are set at once, then links and attached object
 
 (define-object-kind :urdf (world pose urdf compound collision-group)
   (declare (ignore compound))
-  (let* ((model (etypecase urdf
+  (let* ((model (typecase urdf
                   (cl-urdf:robot urdf)
                   (string (cl-urdf:parse-urdf urdf))
-                  (null (btr-fail ":urdf object needs :urdf (a URDF string or a CL-URDF:ROBOT)"))))
+                  (null (btr-fail ":urdf object needs :urdf (a URDF string or a CL-URDF:ROBOT)"))
+                  (t (btr-fail ":urdf object: :urdf is ~s, expected a URDF string or a CL-URDF:ROBOT" urdf))))
          (natural-root (loop for l being the hash-values of (cl-urdf:links model)
                              unless (cl-urdf:parent-joint l) return l)))
     ;; a model whose ROOT-LINK was set to another link is re-rooted there
@@ -242,3 +260,20 @@ not the robot."
   (loop for (arm . link) in arms-and-links
         unless (find link (%attached robot) :key #'second :test #'equal)
           collect arm))
+
+(defun loaded-robot-name ()
+  "The described robot (ROB-INT:DESCRIBED-ROBOT-NAMES) loaded in the current world — a robot
+object named as it or built from a URDF of its name — else the one ROB-INT:*ROBOT-URDF* is the
+model of; NIL when none is."
+  (let ((described (rob-int:described-robot-names)))
+    (flet ((match (name)
+             (and name (find-if (lambda (r) (or (equalp (symbol-name r) (string name))
+                                                (eq r (rob-int:urdf-name->robot-name (string name)))))
+                                described))))
+      (or (loop for o in (objects *current-bullet-world*)
+                thereis (and (typep o 'robot-object)
+                             (or (and (symbolp (name o)) (find (name o) described))
+                                 (match (cl-urdf:name (urdf o))))))
+          (and rob-int:*robot-urdf* (match (cl-urdf:name rob-int:*robot-urdf*)))))))
+
+(setf rob-int::*loaded-robot-name-function* 'loaded-robot-name)

@@ -164,6 +164,12 @@
                            (numbers (attr (child-named element "axis") "xyz" "1 0 0") (format nil "~a axis" name) 3)
                            (list 1d0 0d0 0d0))
                  :limits (and limit
+                              (let ((lower (first (numbers (attr limit "lower" "0") name 1)))
+                                    (upper (first (numbers (attr limit "upper" "0") name 1))))
+                                (when (> lower upper)
+                                  (urdf-fail "joint ~s: lower limit ~s is above upper limit ~s"
+                                             name (attr limit "lower" "0") (attr limit "upper" "0")))
+                                t)
                               (list :lower (first (numbers (attr limit "lower" "0") name 1))
                                     :upper (first (numbers (attr limit "upper" "0") name 1))
                                     :velocity (first (numbers (attr limit "velocity" "0") name 1))
@@ -178,11 +184,32 @@
     (push joint (child-joints parent))
     joint))
 
+(defun joint-cycle-description (links)
+  "A text naming the joints and links of a cycle among LINKS, all of which have a parent joint."
+  (let* ((start (loop for l being the hash-values of links return l))
+         (seen '()) (link start))
+    ;; walk up the parents until a link repeats: that link lies on the cycle
+    (loop until (member link seen) do (push link seen) (setf link (parent (parent-joint link))))
+    (let ((cycle '()) (l link))
+      (loop do (push (parent-joint l) cycle) (setf l (parent (parent-joint l)))
+            until (eq l link))
+      (format nil "~{joint ~s (~s -> ~s)~^, ~}"
+              (loop for j in cycle collect (name j) collect (name (parent j)) collect (name (child j)))))))
+
 (defun parse-urdf (xml)
   "Parse the URDF text XML (a string, or a pathname of a URDF file) into a ROBOT."
-  (let* ((text (etypecase xml
-                 (string xml)
-                 (pathname (uiop:read-file-string xml))))
+  (let* ((text (let ((text (typecase xml
+                             ;; cxml reads a string of any element type, but not a BASE-STRING
+                             ;; (what FORMAT NIL and PRINC-TO-STRING may return): copy it
+                             (string (if (typep xml '(array character (*)))
+                                         xml
+                                         (coerce xml '(simple-array character (*)))))
+                             (pathname (uiop:read-file-string xml))
+                             (t (urdf-fail "expected the URDF text (a string) or a pathname, got ~s"
+                                           xml)))))
+                 (when (zerop (length (string-trim '(#\Space #\Tab #\Newline #\Return) text)))
+                   (urdf-fail "the URDF text is empty (~s); expected a <robot> document" text))
+                 text))
          (doc (handler-case (cxml:parse text (cxml-dom:make-dom-builder))
                 (error (e) (urdf-fail "malformed XML: ~a" e))))
          (root (dom:document-element doc)))
@@ -204,6 +231,9 @@
           (setf (gethash (name joint) joints) joint)))
       (when (zerop (hash-table-count links)) (urdf-fail "the robot has no links"))
       (let ((roots (loop for l being the hash-values of links unless (parent-joint l) collect l)))
+        (when (null roots)
+          (urdf-fail "the joints form a cycle (every link has a parent joint): ~a"
+                     (joint-cycle-description links)))
         (unless (= (length roots) 1)
           (urdf-fail "expected one root link, found ~d: ~{~s~^, ~}" (length roots) (mapcar #'name roots)))
         (make-instance 'robot :name (attr root "name" "") :links links :joints joints

@@ -57,9 +57,18 @@
   "The names of the objects of WORLD, oldest first."
   (copy-list (%object-order world)))
 
+(defvar *object-name-resolvers* '()
+  "Functions (world name) returning the name of an existing object that NAME stands for, or NIL:
+the aliases of older code's names (e.g. CRAM-PR2-DESCRIPTION:PR2 for :PR2), consulted by OBJECT
+only when no object is called NAME.")
+
 (defun object (world name)
-  "The object called NAME in WORLD, or NIL."
-  (values (gethash name (%objects world))))
+  "The object called NAME in WORLD, or NIL (see *OBJECT-NAME-RESOLVERS* for aliases)."
+  (or (values (gethash name (%objects world)))
+      (loop for resolver in *object-name-resolvers*
+            for alias = (funcall resolver world name)
+            when (and alias (not (eq alias name)) (gethash alias (%objects world)))
+              return (values (gethash alias (%objects world))))))
 
 (defun object-by-handle (world handle)
   "The object of WORLD with the native HANDLE, or NIL."
@@ -85,6 +94,7 @@
 (defun copy-world (&optional (world *current-bullet-world*))
   "A new world with copies of every object of WORLD at their current poses and joint states.
 Collision shapes are shared, so copying is cheap."
+  (check-world world 'copy-world)
   (with-world-lock (world)
     (let ((new (make-instance (class-of world) :handle (native:copy-world (world-handle world)))))
       (dolist (o (objects world))
@@ -103,12 +113,40 @@ Collision shapes are shared, so copying is cheap."
   "Run BODY with *CURRENT-BULLET-WORLD* bound to WORLD."
   `(let ((*current-bullet-world* ,world)) ,@body))
 
+(defun finite-real-p (x)
+  "True for a real that is neither NaN nor an infinity."
+  (and (realp x)
+       (not (and (floatp x) (or (sb-ext:float-nan-p x) (sb-ext:float-infinity-p x))))))
+
+(defparameter *max-simulation-steps* 100000000
+  "The most physics steps one call of SIMULATE may take.")
+
+(defun check-world (world where)
+  "Signal a BTR-ERROR naming WHERE unless WORLD is a Bullet world that has not been destroyed."
+  (unless (typep world 'bt-world)
+    (btr-fail "~a: expected a Bullet world (e.g. BTR:*CURRENT-BULLET-WORLD*), got ~s" where world))
+  (unless (native:world-alive-p (world-handle world))
+    (btr-fail "~a: the world ~a has been destroyed (DESTROY-WORLD) and cannot be used" where
+              (world-description world)))
+  world)
+
+(defun world-description (world)
+  "A short text naming WORLD for messages: its class, objects and identity."
+  (let ((*print-length* 6))
+    (if (typep world 'bt-reasoning-world)
+        (format nil "~a with objects ~s" (princ-to-string world) (%object-order world))
+        (princ-to-string world))))
+
 (defun simulate (world seconds &optional (dt 0.01d0))
   "Advance WORLD's physics by SECONDS in steps of DT (ceiling of SECONDS/DT steps)."
-  (unless (and (realp seconds) (>= seconds 0))
-    (btr-fail "SIMULATE: seconds is ~s, expected a non-negative real" seconds))
-  (unless (and (realp dt) (> dt 0))
-    (btr-fail "SIMULATE: dt is ~s, expected a positive real" dt))
+  (check-world world 'simulate)
+  (unless (and (finite-real-p seconds) (>= seconds 0))
+    (btr-fail "SIMULATE: seconds is ~s, expected a finite non-negative real" seconds))
+  (unless (and (finite-real-p dt) (> dt 0))
+    (btr-fail "SIMULATE: dt is ~s, expected a finite positive real" dt))
+  (when (> (/ (rational seconds) (rational dt)) *max-simulation-steps*)
+    (btr-fail "SIMULATE: ~s seconds in steps of ~s need more than ~:d steps (BTR::*MAX-SIMULATION-STEPS*)"
+              seconds dt *max-simulation-steps*))
   (with-world-lock (world)
     (native:simulate (world-handle world) (coerce seconds 'double-float) (coerce dt 'double-float))
     world))

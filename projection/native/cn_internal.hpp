@@ -58,7 +58,7 @@ struct ApiLock {
 
 // The caller's floating point environment (SBCL traps on invalid, overflow and division by
 // zero) is replaced by "all exceptions masked" for the duration of a call and restored, flags
-// included, on return: Bullet, FCL, assimp and llvmpipe compute with infinities and NaNs
+// included, on return: Bullet, assimp and llvmpipe compute with infinities and NaNs
 // internally, and their worker threads inherit the masked environment.
 struct FpMasked {
 #if defined(__x86_64__) || defined(__i386__)

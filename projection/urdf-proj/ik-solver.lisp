@@ -170,7 +170,7 @@ and up to MAX-RESTARTS random configurations drawn from RANDOM-STATE. Second and
          (goal (transform->12 (cl-transforms:pose->transform goal-pose)))
          (q (if seed
                 (let ((v (map 'dvec (lambda (x)
-                                      (unless (and (realp x) (< (abs x) 1d6))
+                                      (unless (and (realp x) (not (and (floatp x) (sb-ext:float-nan-p x))) (< (abs x) 1d6))
                                         (projection-error "SOLVE-IK: seed value ~s is not a finite real." x))
                                       (coerce x 'double-float))
                               seed)))

@@ -32,7 +32,7 @@ reached after clamping.")
 had to be moved by more than *JOINT-CONVERGENCE-TOLERANCE* as (joint wanted set)."
   (let ((clamped '()) (off '()))
     (loop for (j v) in pairs
-          do (unless (and (stringp j) (realp v) (< (abs v) 1d6))
+          do (unless (and (stringp j) (realp v) (not (and (floatp v) (sb-ext:float-nan-p v))) (< (abs v) 1d6))
                (projection-error "Joint state ~s: expected (joint-name finite-value)." (list j v)))
              (unless (movable-joint-p robot j)
                (projection-error "Joint ~s is not a movable joint of ~s." j (btr:name robot)))
@@ -71,7 +71,7 @@ clamped). After :GRIP a hand link must touch an item, otherwise GRIPPER-CLOSED-C
 signalled. MAXIMUM-EFFORT is accepted and has no effect in projection. Returns the joint values."
   (declare (ignore maximum-effort))
   (check-arm arm)
-  (unless (or (member action '(:open :close :grip)) (and (realp action) (< (abs action) 1d6)))
+  (unless (or (member action '(:open :close :grip)) (and (realp action) (not (and (floatp action) (sb-ext:float-nan-p action))) (< (abs action) 1d6)))
     (projection-error "GRIPPER-ACTION: action ~s, expected :OPEN, :CLOSE, :GRIP or a real." action))
   (let* ((robot (robot-object))
          (joints (gripper-joints arm))

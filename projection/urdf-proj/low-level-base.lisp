@@ -31,13 +31,46 @@ planes) do not count."
 
 ;;; ---- navigation ---------------------------------------------------------------------------------
 
+(defvar *warned-navigation-frames* '()
+  "The frames of navigation goals whose frame DRIVE ignored and warned about (once each).")
+
+(defun robot-base-frame-p (frame)
+  "True when FRAME (a frame name, leading / ignored) is the robot's base frame or the root
+link of the robot object (e.g. \"base_footprint\")."
+  (let ((frame (string-left-trim "/" frame))
+        (robot (btr:get-robot-object)))
+    (or (string= frame (string-left-trim "/" cram-tf:*robot-base-frame*))
+        (and robot (btr:urdf robot)
+             (let ((root (ignore-errors (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))))
+               (and root (string= frame root)))))))
+
+(defun navigation-goal-in-map (pose)
+  "The map pose the base drives to for the navigation goal POSE. As CRAM's projection does, a
+pose-stamped in the robot's own base frame (e.g. the tutorial's *BASE-POSE-NEAR-COUNTER* in
+\"base_footprint\") is taken with its numbers as map coordinates, not relative to where the
+robot stands, so the same goal always leads to the same place; a warning says so the first
+time for each frame. Goals in other frames are transformed into the map."
+  (if (and (typep pose 'cl-transforms-stamped:pose-stamped)
+           (robot-base-frame-p (cl-transforms-stamped:frame-id pose)))
+      (let ((frame (cl-transforms-stamped:frame-id pose)))
+        (unless (member frame *warned-navigation-frames* :test #'string=)
+          (push frame *warned-navigation-frames*)
+          (cpl:log-message :warn '(urdf-proj drive)
+                           "Navigation goal ~a is in the robot's base frame ~s: as CRAM does, ~
+                            its numbers are taken as map coordinates (the frame is ignored for ~
+                            navigation). Give goals in ~s to make this explicit."
+                           (pose-summary pose) frame cram-tf:*fixed-frame*))
+        (cl-transforms:make-pose (cl-transforms:origin pose) (cl-transforms:orientation pose)))
+      (pose-in-map pose "DRIVE goal")))
+
 (defun drive (pose)
-  "Teleport the robot's base to POSE (a pose-stamped in any known frame, or a pose in the map).
-When the robot then collides with anything but the floor and its attached objects, it is put
-back and NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base as
+  "Teleport the robot's base to POSE (a pose-stamped, or a pose in the map; a pose-stamped in
+the robot's base frame counts as map coordinates, see NAVIGATION-GOAL-IN-MAP). When the robot
+then collides with anything but the floor and its attached objects, it is put back and
+NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base as
 odom_x_joint / odom_y_joint / odom_z_joint entries."
   (let* ((robot (robot-object))
-         (goal (pose-in-map pose "DRIVE goal"))
+         (goal (navigation-goal-in-map pose))
          (before (btr:pose robot)))
     (with-motion ("going")
       (setf (btr:pose robot) goal)
@@ -70,7 +103,7 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
     (unless (or (realp joint-angle) (member joint-angle '(:upper-limit :lower-limit :middle)))
       (projection-error "MOVE-TORSO: joint angle ~s, expected a real or one of :UPPER-LIMIT, ~
                          :LOWER-LIMIT, :MIDDLE." joint-angle))
-    (when (and (realp joint-angle) (not (< (abs joint-angle) 1d6)))
+    (when (and (realp joint-angle) (or (and (floatp joint-angle) (sb-ext:float-nan-p joint-angle)) (not (< (abs joint-angle) 1d6))))
       (projection-error "MOVE-TORSO: joint angle ~s is not a finite value." joint-angle))
     (with-motion ("moving-torso")
       (unless (movable-joint-p robot joint)
@@ -146,7 +179,7 @@ the computed values (possibly outside their limits)."
 PTU-GOAL-NOT-REACHED after moving when a value had to be clamped by more than 1e-5."
   (let* ((clamped (mapcar (lambda (p)
                             (destructuring-bind (j v) p
-                              (unless (and (stringp j) (realp v) (< (abs v) 1d6))
+                              (unless (and (stringp j) (realp v) (not (and (floatp v) (sb-ext:float-nan-p v))) (< (abs v) 1d6))
                                 (projection-error "Neck joint state ~s: expected (joint-name value)." p))
                               (list j (clamp-joint robot j v))))
                           pairs))
@@ -180,6 +213,9 @@ PTU-GOAL-NOT-REACHED follows a clamped request. Returns the neck joint values."
                                   (pose-in-map target "LOOK-AT target")))
                     (values (neck-angles-towards robot joints (camera-frame robot)
                                                  (cl-transforms:origin map-pose))))
+               (let ((o (cl-transforms:origin map-pose)))
+                 (dolist (hook *look-target-hooks*)
+                   (funcall hook (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)))))
                (apply-neck-joint-states robot (mapcar #'list joints values))))
             (t (projection-error "LOOK-AT: target ~s, expected a pose-stamped, a pose, a frame ~
                                   name or neck joint states, or NIL and a configuration name."

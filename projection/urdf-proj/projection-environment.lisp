@@ -18,6 +18,14 @@ or NIL."
   "The value of VARIABLE in the first solution of QUERY (about the current robot), or DEFAULT."
   (or (and rob-int:*robot-name* (ignore-errors (fact-value variable query))) default))
 
+(defun belief-robot-root-link ()
+  "The root link of the robot in the belief state, or NIL without one: CRAM-TF's base frame in
+the projection. The robot's pose in the belief state is the pose of that link (navigation moves
+it, CRAM-TF:ROBOT-CURRENT-POSE reports it), also when a setup re-rooted the URDF at another link
+than the ROBOT-BASE-FRAME fact names (Pepper: base_footprint on the floor, base_link 0.82 m up)."
+  (let ((robot (ignore-errors (btr:get-robot-object))))
+    (and robot (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))))
+
 (defun arm-tool-frame (arm default)
   (robot-frame `(rob-int:robot-tool-frame ,rob-int:*robot-name* ,arm ?f) '?f default))
 
@@ -38,7 +46,8 @@ and COMMON-DESIG:WAIT-PM."
      (cram-tf:*transformer* (make-instance 'cl-transforms-stamped:transformer))
      (cram-tf:*tf-default-timeout* 0.1)
      (cram-tf:*robot-base-frame*
-      (robot-frame (list 'rob-int:robot-base-frame rob-int:*robot-name* '?f) '?f cram-tf:*robot-base-frame*))
+      (or (belief-robot-root-link)
+          (robot-frame (list 'rob-int:robot-base-frame rob-int:*robot-name* '?f) '?f cram-tf:*robot-base-frame*)))
      (cram-tf:*odom-frame*
       (robot-frame (list 'rob-int:robot-odom-frame rob-int:*robot-name* '?f) '?f cram-tf:*odom-frame*))
      (cram-tf:*robot-torso-frame*

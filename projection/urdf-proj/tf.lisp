@@ -113,12 +113,19 @@ whole or not at all. Returns TRANSFORMER."
 
 ;;; ---- bookkeeping of every motion ------------------------------------------------------------
 
+(defvar *after-motion-hooks* '()
+  "Functions called with the motion's label after each motion (the viewer's replay recorder).")
+
+(defvar *look-target-hooks* '()
+  "Functions called with the target point (x y z) in the map of each LOOK-AT at a point.")
+
 (defun after-motion (label)
   "Run after each motion (also a failed one): TF update inside the projection environment,
-a snapshot labelled LABEL, and the ROBOT-STATE-CHANGED event."
+a snapshot labelled LABEL, *AFTER-MOTION-HOOKS*, and the ROBOT-STATE-CHANGED event."
   (when *tf-from-belief-state*
     (update-tf-from-belief-state))
   (btr:snapshot label)
+  (dolist (hook *after-motion-hooks*) (funcall hook label))
   (coe:on-event (make-instance 'cpoe:robot-state-changed)))
 
 (defmacro with-motion ((label) &body body)

@@ -11,7 +11,9 @@ An action designator is referenced through DESIG:ACTION-GROUNDING to (plan-funct
 resolved-designator), and the plan function is called with the resolved designator's
 properties as keyword arguments, or to (plan-function argument...), called with the
 arguments. When the action has (GOAL occasion) properties that all hold already, it is
-skipped and NIL returned. Every call is recorded in the task tree."))
+skipped and NIL returned (logged as CRAM does: \"Action goal `(...)' already achieved.\").
+Every call is logged at :INFO with its designator, `[(PERFORM ACTION) INFO] <time>:' or
+`[(PERFORM MOTION) INFO] <time>:', and recorded in the task tree."))
 
 (defmethod perform ((designator t))
   (error "PERFORM: expected an action or motion designator, got ~s." designator))
@@ -24,7 +26,12 @@ skipped and NIL returned. Every call is recorded in the task tree."))
   (let ((type (desig:desig-prop-value designator :type)))
     (if (and type (symbolp type)) type :unknown)))
 
+(defun log-performing (kind designator)
+  "CRAM's line for every PERFORM: `[(PERFORM ACTION) INFO] <time>: ' and the designator."
+  (cpl:log-message :info (list 'perform kind) "~%~a~%" designator))
+
 (defmethod perform ((designator desig:motion-designator))
+  (log-performing 'motion designator)
   (cpl:with-task-tree-node (:motion (designator-kind-name designator) :designator designator)
     (let ((modules (cpm:matching-process-modules designator)))
       (when (null modules)
@@ -57,10 +64,11 @@ grounding. Returns (values function arguments)."
   (every (lambda (goal) (coe:holds goal)) goals))
 
 (defmethod perform ((designator desig:action-designator))
+  (log-performing 'action designator)
   (let ((goals (desig:desig-prop-values designator :goal)))
     (if (and goals (goals-hold-p goals))
         (progn
-          (cpl:log-message :info '(perform action) "Action goal `~s' already achieved." goals)
+          (cpl:log-message :info '(perform action) "Action goal `~a' already achieved." goals)
           nil)
         (cpl:with-task-tree-node (:action (designator-kind-name designator)
                                   :designator designator)
@@ -74,7 +82,7 @@ grounding. Returns (values function arguments)."
                   (apply function arguments))
               (when (and goals (not (goals-hold-p goals)))
                 (cpl:log-message :warn '(perform action)
-                                 "Goal `~s' of the action ~s does not hold after performing it."
+                                 "Goal `~a' of the action ~s does not hold after performing it."
                                  goals (designator-kind-name designator)))))))))
 
 ;;; Designator hooks of the COMMON-FAIL retry strategies.

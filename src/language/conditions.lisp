@@ -72,6 +72,24 @@ TRY-ALL ...) runs outside any TOP-LEVEL."))
                      (nested-top-level-outer condition))))
   (:documentation "Signalled when TOP-LEVEL is entered from inside a task."))
 
+(define-condition task-exit-error (error)
+  ((task-name :initarg :task-name :reader task-exit-task-name)
+   (detail :initarg :detail :initform nil :reader task-exit-detail))
+  (:report (lambda (condition stream)
+             (format stream "A non-local exit (RETURN-FROM, THROW or GO) tried to leave the ~
+                             plan task ~s for a point outside it~@[ (~a)~]. Plan tasks run in ~
+                             their own threads: a task's code must return normally or signal a ~
+                             failure (CPL:FAIL); the exit was not taken."
+                     (task-exit-task-name condition)
+                     (task-exit-detail condition))))
+  (:documentation "Signalled in the parent (ultimately by TOP-LEVEL) when code inside a plan
+task (the TOP-LEVEL body, a PAR, PURSUE, TRY-ALL ... child) made a RETURN-FROM, THROW or GO to a
+block, catch tag or tagbody outside the task. Such exits would cross threads; the task fails
+with this error instead and every task thread is joined."))
+
+(setf (documentation 'task-exit-task-name 'function)
+      "The name of the plan task that a TASK-EXIT-ERROR tried to leave.")
+
 (defgeneric failure-description (condition)
   (:documentation "A one-line human-readable text describing CONDITION, used
 in the task tree next to its class name. Layers with their own failure

@@ -2,6 +2,27 @@
 
 (in-package :cram-language)
 
+(defun condition-initargs (class-name)
+  "The initargs the slots of the condition class CLASS-NAME accept, or :UNKNOWN."
+  (handler-case
+      (let ((class (find-class class-name)))
+        (unless (sb-mop:class-finalized-p class)
+          (sb-mop:finalize-inheritance class))
+        (loop for slot in (sb-mop:class-slots class)
+              append (sb-mop:slot-definition-initargs slot)))
+    (error () :unknown)))
+
+(defun check-condition-initargs (class-name initargs)
+  "Signal an error naming the first of the plist INITARGS that no slot of the condition class
+CLASS-NAME accepts."
+  (let ((valid (condition-initargs class-name)))
+    (unless (eq valid :unknown)
+      (loop for (key nil) on initargs by #'cddr
+            unless (member key valid)
+              do (error "FAIL: ~s is not an initarg of the condition class ~s; it accepts ~
+                         ~:[none~;~:*~{~s~^ ~}~]."
+                        key class-name (remove-duplicates valid))))))
+
 (defun coerce-to-failure (arguments)
   "Turn the arguments of FAIL into a condition object."
   (let ((first (first arguments)))
@@ -20,6 +41,7 @@
            (unless (evenp (length (rest arguments)))
              (error "FAIL: odd number of initargs ~s for condition class ~s."
                     (rest arguments) first))
+           (check-condition-initargs first (rest arguments))
            (apply #'make-condition first (rest arguments)))
           ((symbolp first)
            (error "FAIL: ~s does not name a condition class; expected a format ~

@@ -8,7 +8,12 @@
   "Run BODY as a top-level plan named NAME (evaluated): in a new thread, as the
 root task, with a fresh task tree stored in *LAST-TASK-TREE*; wait for it and
 return its values. A failure escaping BODY is signalled in the caller with
-ERROR. Entering a top-level from inside a task signals NESTED-TOP-LEVEL-ERROR."
+ERROR. Entering a top-level from inside a task signals NESTED-TOP-LEVEL-ERROR.
+BODY and every PAR, PURSUE, TRY-ALL ... child run in threads of their own: a
+RETURN-FROM, THROW or GO from inside one of them to a block, catch tag or
+tagbody outside it is not taken; the task fails with TASK-EXIT-ERROR instead,
+which reaches the caller of the top-level like any Lisp error, after every task
+thread has ended."
   `(call-as-top-level ,name (lambda () ,@body)))
 
 (defmacro top-level (&body body)

@@ -12,6 +12,7 @@
    #:*current-task* #:task #:task-name #:task-status #:task-parent
    #:current-task-p #:*inherited-specials* #:with-evaporation-deferred
    #:not-inside-plan-error #:nested-top-level-error
+   #:task-exit-error #:task-exit-task-name
    ;; failures
    #:plan-failure #:simple-plan-failure #:composite-failure #:composite-failures
    #:common-lisp-error-envelope #:envelop-error

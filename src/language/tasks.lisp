@@ -93,9 +93,25 @@ a long or blocking wait."
     (setf (task-evaporating task) t)
     (throw task :evaporated)))
 
+(defun call-with-exit-guard (task thunk internal-exit-p)
+  "Call THUNK and return its values. A non-local exit out of THUNK that is not one of the
+task's own (INTERNAL-EXIT-P, a function of no arguments, returns true for those) targets a
+block, catch tag or tagbody of another thread: it is stopped here and becomes a
+TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
+  (let ((tag (list 'exit-guard)) (finished nil))
+    (let ((result (catch tag
+                    (unwind-protect
+                         (multiple-value-prog1 (cons :values (multiple-value-list (funcall thunk)))
+                           (setf finished t))
+                      (unless (or finished (funcall (the function internal-exit-p)))
+                        (throw tag :foreign-exit))))))
+      (if (eq result :foreign-exit)
+          (error 'task-exit-error :task-name (task-name task))
+          (values-list (cdr result))))))
+
 (defun execute-task (task thunk node)
   "The body of a task thread: run THUNK, classify the outcome, report it."
-  (let ((status :evaporated) (values '()) (failure nil))
+  (let ((status :evaporated) (values '()) (failure nil) (leaving nil))
     (catch task
       (let ((*evaporation-target* task))
         (when (task-evaporate-requested task)
@@ -104,16 +120,25 @@ a long or blocking wait."
         (block run
           (handler-bind ((plan-failure
                            (lambda (c)
-                             (setf failure c status :failed)
+                             (setf failure c status :failed leaving t)
                              (return-from run)))
                          (error
                            (lambda (c)
+                             (when (typep c 'control-error)
+                               ;; a THROW to a tag no frame of this thread established
+                               (setf c (make-condition 'task-exit-error
+                                                       :task-name (task-name task)
+                                                       :detail (handler-case (princ-to-string c)
+                                                                 (error () nil)))))
                              (setf failure (make-condition 'common-lisp-error-envelope
                                                            :error c)
-                                   status :failed)
+                                   status :failed leaving t)
                              (return-from run))))
             (setf values (multiple-value-list
-                          (if node (run-in-node node thunk) (funcall thunk)))
+                          (call-with-exit-guard
+                           task
+                           (if node (lambda () (run-in-node node thunk)) thunk)
+                           (lambda () (or leaving (task-evaporating task)))))
                   status :succeeded)))))
     (finish-task task status values failure)))
 

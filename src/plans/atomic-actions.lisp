@@ -166,9 +166,18 @@ the object is there, else from the designator's data."
     (cl-transforms:pose location)
     (t (pp-error "Expected a location designator or a pose as target, got ~s." location))))
 
+(defun base-frame-stamped-p (pose)
+  "True when POSE is a pose-stamped in the robot's base frame."
+  (and (typep pose 'cl-transforms-stamped:pose-stamped)
+       (string= (string-left-trim "/" (cl-transforms-stamped:frame-id pose))
+                (string-left-trim "/" (robot-base-frame)))))
+
 (defun navigate (&key target pose &allow-other-keys)
-  "Drive the robot base to TARGET (a location designator) or POSE."
-  (let ((?pose (map-stamped (or pose (location-pose target)))))
+  "Drive the robot base to TARGET (a location designator) or POSE. A goal in the robot's base
+frame goes to the going motion as it is: CRAM's projection takes its numbers as map
+coordinates (see URDF-PROJ::NAVIGATION-GOAL-IN-MAP); goals in other frames are put in the map."
+  (let* ((goal (or pose (location-pose target)))
+         (?pose (if (base-frame-stamped-p goal) goal (map-stamped goal))))
     (exe:perform (desig:a motion (type going) (pose ?pose)))))
 
 (def-action-grounding :going (d)
@@ -276,14 +285,43 @@ robot description (:PARK, :CARRY, :POINT ...) or joint states already."
     (list (resolved 'position-arms :positioning-arm
                     `((:left-configuration ,left) (:right-configuration ,right))))))
 
-(defun park-arms (&key (arms (robot-arms)) (configuration :park) &allow-other-keys)
-  "Bring ARMS (default: all arms of the robot) into CONFIGURATION (default :PARK)."
-  (let* ((arms (arm-list arms))
+(defparameter *arm-joints-convergence-delta* 0.17d0
+  "Radians (about 10 degrees) within which an arm joint counts as at its goal for the occasion
+CPOE:ARMS-POSITIONED-AT.")
+
+(defun angle-difference (a b)
+  (let ((d (- a b))) (abs (atan (sin d) (cos d)))))
+
+(defun arms-positioned-p (left-configuration right-configuration
+                          &optional (delta *arm-joints-convergence-delta*))
+  "True when the robot's left and right arm joints are within DELTA of LEFT-CONFIGURATION and
+RIGHT-CONFIGURATION (configuration names such as :PARK, or joint states); NIL as a
+configuration asks nothing of that arm."
+  (let ((robot (btr:get-robot-object)))
+    (and robot
+         (loop for arm in '(:left :right)
+               for configuration in (list left-configuration right-configuration)
+               always (loop for (joint value) in (arm-configuration-joint-states arm configuration)
+                            always (< (angle-difference (btr:joint-state robot joint) value) delta))))))
+
+(def-fact-group arm-occasions (cpoe:arms-positioned-at)
+  (<- (cpoe:arms-positioned-at ?left-configuration ?right-configuration)
+    (lisp-pred arms-positioned-p ?left-configuration ?right-configuration)))
+
+(defun park-arms (&key (arms (robot-arms) arms-p) (arm nil arm-p) (configuration :park)
+                  &allow-other-keys)
+  "Bring ARMS (default: all arms of the robot; CRAM's keyword ARM is accepted too, an arm or a
+list of arms) into CONFIGURATION (default :PARK). The action's goal is CPOE:ARMS-POSITIONED-AT,
+so arms already there are not moved (\"Action goal ... already achieved.\")."
+  (when (and arms-p arm-p)
+    (pp-error "PARK-ARMS: give the arms either as :ARMS ~s or as :ARM ~s, not both." arms arm))
+  (let* ((arms (arm-list (if arm-p arm arms)))
          (?left (and (member :left arms) configuration))
          (?right (and (member :right arms) configuration)))
     (exe:perform (desig:an action (type positioning-arm)
                            (desig:when ?left (left-configuration ?left))
-                           (desig:when ?right (right-configuration ?right))))))
+                           (desig:when ?right (right-configuration ?right))
+                           (goal (cpoe:arms-positioned-at ?left ?right))))))
 
 (def-action-grounding :parking-arms (d)
   (let ((arms (arm-list (or (prop d :arms) (prop d :arm) (robot-arms)))))
@@ -333,6 +371,7 @@ the grasp in the belief state with an OBJECT-ATTACHED-ROBOT event."
              (cpl:log-message :warn '(pick-place grip) "Giving up")))
         (exe:perform (desig:a motion (type gripping) (gripper ?arm) (effort ?effort)))))
     (cpl:log-message :info '(pick-place grip) "Assert grasp into knowledge base")
+    (note-gripped-object object)
     (coe:on-event (make-instance 'cpoe:object-attached-robot
                                  :arm arm :grasp grasp
                                  :object-name (object-designator-name object)

@@ -174,40 +174,126 @@ target is raised to rest on it."
                (cl-transforms:orientation goal))
               goal)))))
 
-(defun placing-groundings (d)
+;;; What the hands hold: placing without an OBJECT takes it from the hand, and without a TARGET
+;;; puts it back where it was picked up from (CRAM's object-in-hand and old object pose).
+
+(defvar *gripped-objects* (make-hash-table :test 'eq :synchronized t)
+  "Object name -> (DESIGNATOR . POSE): the designator the object was gripped with and its map
+pose at that moment, where a placing action without a target puts it back.")
+
+(defun note-gripped-object (object)
+  "Record the object designator OBJECT and its current map pose as it is gripped."
+  (let ((name (object-designator-name object)))
+    (setf (gethash name *gripped-objects*)
+          (cons object (ignore-errors (object-pose-in-map object))))))
+
+(defun held-objects (&optional arm)
+  "The objects an end effector of the robot carries, as (NAME ARM GRASP), for ARM or all arms."
+  (let ((robot (btr:get-robot-object)))
+    (when robot
+      (loop for (name link nil grasp) in (btr:attached-objects robot)
+            for holder = (find link (robot-arms) :key #'end-effector-link :test #'equal)
+            when (and holder (or (null arm) (eq holder arm)))
+              collect (list name holder grasp)))))
+
+(defun held-object-designator (name)
+  "The designator NAME was gripped with, or a fresh one naming it and its type."
+  (let ((record (gethash name *gripped-objects*)))
+    (if record
+        (car record)
+        (let ((o (btr:object btr:*current-bullet-world* name)))
+          (desig:make-designator :object `((:type ,(or (and o (btr:item-type o)) :object))
+                                           (:name ,name)))))))
+
+(defun placing-object-and-arm (d)
+  "The object designator and the arm of the placing action D: as given, else from the hand."
   (let* ((object (prop d :object))
-         (target (prop d :target))
-         (name (object-designator-name object))
-         (type (object-designator-type object))
-         (holding (arms-holding name))
-         (arm (let ((arm (prop d :arm)))
-                (cond ((and arm (listp arm)) (check-arm (first arm)))
-                      (arm (check-arm arm))
-                      (holding (first holding))
-                      (t (pp-error "The placing action ~s: no ARM given and no arm holds ~s."
-                                   d name)))))
-         (grasp (or (prop d :grasp) (first (man-int:object-type-grasps type arm))))
-         (target-pose (placing-target-pose object type target))
-         (hold (relative-transform (object-pose-in-map object) (tool-pose-in-map arm)))
-         (trajectory (man-int:get-action-trajectory :placing arm grasp type target-pose
-                                                    :object-to-gripper hold)))
-    (list (resolved 'place :placing
-                    `((:arm ,arm) (:grasp ,grasp) (:object ,object) (:target ,target)
-                      (:target-pose ,(map-stamped target-pose))
-                      (:trajectory ,trajectory))))))
+         (given (prop d :arm))
+         (arm (cond ((and given (listp given)) (check-arm (first given)))
+                    (given (check-arm given)))))
+    (when (and object (not (typep object 'desig:object-designator)))
+      (pp-error "The placing action ~s: OBJECT is ~s, expected an object designator, or no ~
+                 OBJECT to place what the hand holds." d object))
+    (if object
+        (values object
+                (or arm (first (arms-holding (object-designator-name object)))
+                    (pp-error "The placing action ~s: no ARM given and no arm holds ~s."
+                              d (object-designator-name object))))
+        (let ((held (held-objects arm)))
+          (cond ((null held)
+                 (pp-error "The placing action ~s has no OBJECT, and ~:[no arm holds ~
+                            anything~;~:*the ~s arm holds nothing~]." d arm))
+                ((rest held)
+                 (pp-error "The placing action ~s has no OBJECT, and the arms hold ~{~s~^ and ~}: ~
+                            say which with (arm ...)." d (mapcar #'first held)))
+                (t (values (held-object-designator (first (first held)))
+                           (second (first held)))))))))
+
+(defun placing-default-target (object)
+  "A location designator at the pose OBJECT had when it was gripped."
+  (let* ((name (object-designator-name object))
+         (pose (cdr (gethash name *gripped-objects*))))
+    (unless pose
+      (pp-error "A placing action without TARGET puts the object back where it was picked up, ~
+                 but that is not known for ~s (it was not gripped by a picking-up action); ~
+                 give (target (a location (pose ...)))." name))
+    (let ((?pose (map-stamped pose)))
+      (desig:a location (pose ?pose)))))
+
+(defun placing-groundings (d)
+  (multiple-value-bind (object arm) (placing-object-and-arm d)
+    (let* ((target (or (prop d :target) (placing-default-target object)))
+           (type (object-designator-type object))
+           (grasp (or (prop d :grasp)
+                      (third (find (object-designator-name object) (held-objects arm) :key #'first))
+                      (first (man-int:object-type-grasps type arm))))
+           (target-pose (placing-target-pose object type target))
+           (hold (relative-transform (object-pose-in-map object) (tool-pose-in-map arm)))
+           (trajectory (man-int:get-action-trajectory :placing arm grasp type target-pose
+                                                      :object-to-gripper hold)))
+      (list (resolved 'place :placing
+                      `((:arm ,arm) (:grasp ,grasp) (:object ,object) (:target ,target)
+                        (:target-pose ,(map-stamped target-pose))
+                        (:trajectory ,trajectory)))))))
 
 (def-action-grounding :placing (d)
-  (unless (typep (prop d :object) 'desig:object-designator)
-    (pp-error "The placing action ~s needs the OBJECT designator in hand, got ~s."
-              d (prop d :object)))
-  (unless (prop d :target)
-    (pp-error "The placing action ~s needs a TARGET location designator." d))
   (placing-groundings d))
+
+;;; Coming to rest: a released object falls onto what is below it, as in CRAM, where the
+;;; belief state simulates the world after a release.
+
+(defparameter *settling-seconds* 2d0
+  "Seconds of physics simulated after an object is released.")
+(defparameter *settling-drop* 0.2d0
+  "The largest gap (metres) between a released object and the surface below it that is closed
+by lowering the object before the simulation; a larger gap is left to the physics.")
+
+(defun settle-released-object (name)
+  "Let the released object NAME come to rest: when it hovers above a surface (up to
+*SETTLING-DROP*), lower it onto it, then simulate *SETTLING-SECONDS* of physics."
+  (let* ((world btr:*current-bullet-world*)
+         (o (btr:object world name)))
+    (when o
+      (multiple-value-bind (lo hi) (btr:aabb o)
+        (let* ((x (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))
+               (y (/ (+ (cl-transforms:y lo) (cl-transforms:y hi)) 2))
+               (bottom (cl-transforms:z lo))
+               (support (support-height-below x y (+ bottom 0.005d0) :ignore (list name)))
+               (gap (and support (- bottom support))))
+          (when (and gap (< 0 gap *settling-drop*))
+            (let ((pose (btr:pose o)))
+              (setf (btr:pose o)
+                    (cl-transforms:make-pose
+                     (cl-transforms:v- (cl-transforms:origin pose)
+                                       (cl-transforms:make-3d-vector 0 0 (- gap 0.0005d0)))
+                     (cl-transforms:orientation pose)))))))
+      (btr:simulate world *settling-seconds*))))
 
 (defun place (&key arm object target target-pose trajectory &allow-other-keys)
   "Put OBJECT held by ARM at TARGET-POSE along TRAJECTORY (:REACHING, :PUTTING, :RETRACTING):
-look, reach and put (failures propagate), open the gripper, record the release and the new
-location in the belief, retract (failures ignored) and park the arm."
+look, reach and put (failures propagate), open the gripper, record the release in the belief,
+where the object comes to rest on the surface below it, record its new location, retract
+(failures ignored) and park the arm."
   (let ((?target-pose target-pose) (?arm arm))
     (log-pp 'place "Looking")
     (handler-case
@@ -227,6 +313,8 @@ location in the belief, retract (failures ignored) and park the arm."
     (coe:on-event (make-instance 'cpoe:object-detached-robot
                                  :arm arm :object-name (object-designator-name object)
                                  :object-designator object))
+    (remhash (object-designator-name object) *gripped-objects*)
+    (settle-released-object (object-designator-name object))
     (log-pp 'place "Updating object location in knowledge base")
     (coe:on-event (make-instance 'cpoe:object-location-changed
                                  :object-designator object

@@ -17,18 +17,31 @@
     (or (gethash name *marker-ids*)
         (setf (gethash name *marker-ids*) (1+ (hash-table-count *marker-ids*))))))
 
+(defvar *marker-mesh-uris* :file
+  "How mesh markers name their files. :FILE (the default): file:// URIs of the resolved files,
+which an rviz on this machine loads whatever its ROS_PACKAGE_PATH. :PACKAGE: package:// URIs as
+the objects were made with, for an rviz on another machine whose ROS_PACKAGE_PATH holds the
+packages (resources/ is the package cram_plans_resources).")
+
 (defun mesh-resource-uri (mesh)
   "A URI rviz can load for MESH (a keyword of BTR:*MESH-FILES*, a URI string or a path), or NIL
-when MESH names no known file."
+when MESH names no known file. package:// URIs become file:// URIs unless *MARKER-MESH-URIS*
+is :PACKAGE."
+  (unless (member *marker-mesh-uris* '(:file :package))
+    (ros-fail "*MARKER-MESH-URIS* is ~s, expected :FILE or :PACKAGE" *marker-mesh-uris*))
   (flet ((file-uri (path)
            (let ((true (ignore-errors (probe-file path))))
              (and true (concatenate 'string "file://" (namestring true))))))
     (etypecase mesh
       (keyword (let ((uri (second (assoc mesh btr:*mesh-files*))))
                  (and uri (mesh-resource-uri uri))))
-      (string (if (or (uiop:string-prefix-p "package://" mesh) (uiop:string-prefix-p "file://" mesh))
-                  mesh
-                  (file-uri mesh)))
+      (string (cond ((uiop:string-prefix-p "file://" mesh) mesh)
+                    ((uiop:string-prefix-p "package://" mesh)
+                     (if (eq *marker-mesh-uris* :package)
+                         mesh
+                         (let ((path (ignore-errors (btr::resolve-uri mesh))))
+                           (if path (file-uri path) mesh))))
+                    (t (file-uri mesh))))
       (pathname (file-uri mesh))
       (null nil))))
 

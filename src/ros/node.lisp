@@ -6,6 +6,24 @@
 ;; roslisp has just (re)defined ROS-LOAD:LOAD-SYSTEM; this project's loader wraps it again
 (ros-load-manifest::install-cram-plans-load-system)
 
+;; roslisp's loader (ros-load-manifest) adds PERFORM :AROUND methods on (COMPILE-OP T) and
+;; (LOAD-OP T) to every Lisp file ASDF handles afterwards: a marker file per component *name* in
+;; $ROS_HOME, waited on while it exists. It was written for catkin workspaces compiled by several
+;; processes; here it makes unrelated files of the same name (every "package.lisp") wait for each
+;; other across images sharing a ROS_HOME, and a marker left by a killed compile blocks every later
+;; load of a file of that name forever. ASDF already writes fasls atomically (temporary file, then
+;; rename), so the methods are removed.
+(defun remove-roslisp-asdf-markers ()
+  "Remove ros-load-manifest's marker-file PERFORM :AROUND methods; returns how many were removed."
+  (let ((count 0))
+    (dolist (op '(asdf:compile-op asdf:load-op) count)
+      (let ((method (find-method #'asdf:perform '(:around) (list (find-class op) (find-class t)) nil)))
+        (when method
+          (remove-method #'asdf:perform method)
+          (incf count))))))
+
+(remove-roslisp-asdf-markers)
+
 (defun roslisp-log (level text)
   "Log TEXT at LEVEL through roslisp's macros (stdout, and /rosout while a node runs)."
   (ecase level
@@ -33,7 +51,7 @@
     (ros-log :debug "Running ~a function ~s" kind name)
     (funcall name)))
 
-(defun %startup-ros (name anonymous uri publish-rate)
+(defun %startup-ros (name anonymous uri publish-rate world)
   "STARTUP-ROS once a master answers at URI and roslisp is loaded."
   (multiple-value-bind (host port) (parse-master-uri uri)
     (declare (ignore port))
@@ -44,7 +62,9 @@
       (sb-posix:setenv "ROS_IP" "127.0.0.1" 1))
     (roslisp:start-ros-node name :master-uri uri :anonymous anonymous :cmd-line-args nil)
     (reset-publications)
-    (call-registered *ros-init-functions* "ROS init")
+    (call-registered (select-init-functions *ros-init-functions* #'roslisp-read-parameter
+                                            :world world)
+                     "ROS init")
     (when publish-rate
       (start-belief-state-publisher :rate publish-rate))
     roslisp::*ros-node-name*))

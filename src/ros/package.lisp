@@ -16,6 +16,8 @@
    #:register-ros-init-function #:register-ros-cleanup-function
    #:unregister-ros-init-function #:unregister-ros-cleanup-function
    #:ros-init-functions #:ros-cleanup-functions
+   ;; which world startup-ros builds
+   #:register-ros-world #:ros-worlds #:select-init-functions #:ros-world-error
    #:*ros-init-functions* #:*ros-cleanup-functions*
    ;; URDFs from the parameter server
    #:robot-description-string #:description-parameter-missing
@@ -24,7 +26,7 @@
    #:lispify-ros-name
    ;; the belief state on /tf and markers
    #:*belief-state-publish-rate* #:*tf-fixed-frame* #:*environment-tf-prefix*
-   #:*tf-topic* #:*marker-topic* #:*marker-namespace*
+   #:*tf-topic* #:*marker-topic* #:*marker-namespace* #:*marker-mesh-uris*
    #:object-frame-name #:belief-state-transforms #:belief-state-markers
    #:publish-belief-state #:start-belief-state-publisher #:stop-belief-state-publisher
    #:belief-state-publisher-running-p))

@@ -94,6 +94,10 @@ roslisp's shape."
 (defun ensure-roslisp-part ()
   "Load the system roslisp-utilities/ros (roslisp and the message systems) unless it is loaded."
   (unless *node-status-function*
+    (unless (asdf:find-system "roslisp" nil)
+      (ros-fail "STARTUP-ROS needs roslisp, and ASDF finds no system \"roslisp\": install the ~
+                 Debian package roslisp (make setup does), or add its directory to ASDF's ~
+                 source registry"))
     (handler-bind ((warning #'muffle-warning))
       (asdf:load-system "cram-plans/roslisp-utilities/ros")))
   t)
@@ -111,22 +115,27 @@ roslisp's shape."
   rate)
 
 (defun startup-ros (&key (name "cram_plans") anonymous master-uri
-                      (publish-rate *belief-state-publish-rate*))
+                      (publish-rate *belief-state-publish-rate*) world)
   "Start this image's ROS node NAME (with a unique suffix when ANONYMOUS) on the master at
 MASTER-URI (a string http://HOST:PORT; default $ROS_MASTER_URI, see ROS-MASTER-URI), call the
 registered init functions in order, then start the belief-state publisher at PUBLISH-RATE Hz
 (NIL: publish only on demand, through PUBLISH-BELIEF-STATE). A running node is shut down first.
+Of the init functions that build a world (see REGISTER-ROS-WORLD), only the one of the world
+the parameter server describes runs (kitchen_description: the kitchen with the PR2;
+shelf_description: the shop with Pepper), or the one of WORLD (e.g. :KITCHEN) when given;
+parameters that fit no world, or several, are a ROS-WORLD-ERROR naming them.
 Loads roslisp (system roslisp-utilities/ros) on first use. When no master answers within 3 s,
 signals ROS-MASTER-UNREACHABLE naming the URI and ROS_MASTER_URI, without starting or loading
 anything. Returns the node's name."
   (check-node-name name)
   (check-publish-rate publish-rate)
+  (when world (find-ros-world world))
   (multiple-value-bind (uri source) (ros-master-uri master-uri)
     (parse-master-uri uri)
     (unless (ros-available-p :master-uri uri :timeout 3)
       (error 'ros-master-unreachable :uri uri :source source))
     (ensure-roslisp-part)
-    (uiop:symbol-call :roslisp-utilities '#:%startup-ros name anonymous uri publish-rate)))
+    (uiop:symbol-call :roslisp-utilities '#:%startup-ros name anonymous uri publish-rate world)))
 
 (defun shutdown-ros ()
   "Stop the belief-state publisher, call the registered cleanup functions (an error in one is

@@ -13,6 +13,14 @@ A non-string signals CL-TRANSFORMS:TRANSFORM-INPUT-ERROR naming it."
         ((typep frame 'simple-string) frame)
         (t (coerce frame 'simple-string))))
 
+(defun frame-name-arg (frame place)
+  "FRAME normalised by NORMALIZE-FRAME-NAME for a constructor at PLACE; an empty name (\"\" or
+only slashes) names no frame and signals TRANSFORM-INPUT-ERROR."
+  (let ((name (normalize-frame-name frame place)))
+    (when (zerop (length name))
+      (cl-transforms::input-error frame "a non-empty frame name such as \"map\"" place))
+    name))
+
 (defun %stamp (stamp place)
   "STAMP, a real time in seconds, as a double float."
   (cl-transforms::ensure-double stamp place))
@@ -124,7 +132,7 @@ TRANSFORM-STAMPED."
   "A POSE-STAMPED at ORIGIN (a 3D-VECTOR) with ORIENTATION (a QUATERNION) in the frame FRAME-ID
 (a string; a leading \"/\" is dropped) at time STAMP (a real, seconds)."
   (%make-pose-stamped
-   (normalize-frame-name frame-id 'make-pose-stamped)
+   (frame-name-arg frame-id 'make-pose-stamped)
    (%stamp stamp "MAKE-POSE-STAMPED stamp")
    (cl-transforms::check-type-of origin '3d-vector "a 3D-VECTOR as origin" 'make-pose-stamped)
    (cl-transforms::check-type-of orientation 'quaternion "a QUATERNION as orientation"
@@ -164,8 +172,8 @@ stamped with FRAME-ID and STAMP."
   "A TRANSFORM-STAMPED from FRAME-ID to CHILD-FRAME-ID at time STAMP with TRANSLATION (a
 3D-VECTOR) and ROTATION (a QUATERNION): the pose of CHILD-FRAME-ID in FRAME-ID."
   (%make-transform-stamped
-   (normalize-frame-name frame-id 'make-transform-stamped)
-   (normalize-frame-name child-frame-id 'make-transform-stamped)
+   (frame-name-arg frame-id 'make-transform-stamped)
+   (frame-name-arg child-frame-id 'make-transform-stamped)
    (%stamp stamp "MAKE-TRANSFORM-STAMPED stamp")
    (cl-transforms::check-type-of translation '3d-vector "a 3D-VECTOR as translation"
                                  'make-transform-stamped)
@@ -196,7 +204,7 @@ stamped with FRAME-ID and STAMP."
 (defun make-point-stamped (frame-id stamp point)
   "A POINT-STAMPED at POINT (a 3D-VECTOR or a list (x y z)) in FRAME-ID at time STAMP."
   (let ((p (cl-transforms::%ensure-vector-like point "MAKE-POINT-STAMPED point")))
-    (%make-point-stamped (normalize-frame-name frame-id 'make-point-stamped)
+    (%make-point-stamped (frame-name-arg frame-id 'make-point-stamped)
                          (%stamp stamp "MAKE-POINT-STAMPED stamp")
                          (x p) (y p) (z p))))
 

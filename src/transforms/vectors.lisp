@@ -129,11 +129,16 @@ components)."
 (defun make-quaternion (x y z w)
   "A rotation QUATERNION with components X Y Z W (any finite reals), normalised to unit length.
 A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
-  (%unit-quaternion (ensure-double x "MAKE-QUATERNION x")
-                    (ensure-double y "MAKE-QUATERNION y")
-                    (ensure-double z "MAKE-QUATERNION z")
-                    (ensure-double w "MAKE-QUATERNION w")
-                    (list x y z w)))
+  (let* ((dx (ensure-double x "MAKE-QUATERNION x"))
+         (dy (ensure-double y "MAKE-QUATERNION y"))
+         (dz (ensure-double z "MAKE-QUATERNION z"))
+         (dw (ensure-double w "MAKE-QUATERNION w"))
+         (m (max (abs dx) (abs dy) (abs dz) (abs dw))))
+    ;; components so large or so small that their squares overflow or vanish: the direction
+    ;; is all that matters, so scale them first
+    (when (and (or (> m 1d100) (< 0d0 m 1d-100)))
+      (setf dx (/ dx m) dy (/ dy m) dz (/ dz m) dw (/ dw m)))
+    (%unit-quaternion dx dy dz dw (list x y z w))))
 
 (defun copy-3d-vector (vector &key x y z)
   "A 3D-VECTOR like VECTOR with the coordinates given by X, Y, Z replaced."
@@ -151,15 +156,21 @@ A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
 ;;; Vector arithmetic
 
 (defmacro define-vector-op (name lambda-list doc &body body)
-  "Define NAME as an inline function whose vector arguments are checked to be 3D-VECTORs."
-  (let ((vectors (remove-if-not (lambda (a) (member a '(v v1 v2 a b))) lambda-list)))
+  "Define NAME as an inline function whose vector arguments are checked to be 3D-VECTORs. A
+floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the arguments."
+  (let ((vectors (remove-if-not (lambda (a) (member a '(v v1 v2 a b))) lambda-list))
+        (args (remove-if (lambda (a) (member a lambda-list-keywords))
+                         (mapcar (lambda (a) (if (consp a) (car a) a)) lambda-list))))
     `(progn
        (declaim (inline ,name))
        (defun ,name ,lambda-list
          ,doc
          ,@(loop for v in vectors
                  collect `(unless (3d-vector-p ,v) (input-error ,v "a 3D-VECTOR" ',name)))
-         ,@body))))
+         (handler-case (progn ,@body)
+           (floating-point-overflow ()
+             (input-error (list ,@args) "arguments whose result is within double-float range"
+                          ',name)))))))
 
 (define-vector-op v+ (v1 v2)
   "The sum of the 3D-VECTORs V1 and V2."
@@ -204,15 +215,28 @@ A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
         (bx (%v-x v2)) (by (%v-y v2)) (bz (%v-z v2)))
     (%make-3d-vector (- (* ay bz) (* az by)) (- (* az bx) (* ax bz)) (- (* ax by) (* ay bx)))))
 
+(defun %scaled-norm (x y z)
+  "sqrt(x² + y² + z²) of the double floats X Y Z, computed without overflow."
+  (declare (type double-float x y z))
+  (let ((m (max (abs x) (abs y) (abs z))))
+    (if (zerop m)
+        0d0
+        (let ((x (/ x m)) (y (/ y m)) (z (/ z m)))
+          (* m (sqrt (+ (* x x) (* y y) (* z z))))))))
+
 (define-vector-op v-norm (v)
   "The Euclidean length of the 3D-VECTOR V."
   (let ((x (%v-x v)) (y (%v-y v)) (z (%v-z v)))
-    (sqrt (+ (* x x) (* y y) (* z z)))))
+    (if (< (max (abs x) (abs y) (abs z)) 1d150)
+        (sqrt (+ (* x x) (* y y) (* z z)))
+        (%scaled-norm x y z))))
 
 (define-vector-op v-dist (v1 v2)
   "The Euclidean distance between the points V1 and V2."
   (let ((dx (- (%v-x v1) (%v-x v2))) (dy (- (%v-y v1) (%v-y v2))) (dz (- (%v-z v1) (%v-z v2))))
-    (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))
+    (if (< (max (abs dx) (abs dy) (abs dz)) 1d150)
+        (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))
+        (%scaled-norm dx dy dz))))
 
 (define-vector-op normalize-vector (v)
   "The 3D-VECTOR V scaled to unit length; the zero vector signals TRANSFORM-INPUT-ERROR."

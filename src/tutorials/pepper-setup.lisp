@@ -52,10 +52,9 @@ URDF re-rooted at *PEPPER-ROOT-LINK* so that it stands on the floor."
          (robot-name (rob-int:set-robot-name (cl-urdf:name robot))))
     (setf rob-int:*robot-urdf* robot
           btr:*environment-name* :kitchen
-          cram-tf:*robot-base-frame* (or (rob-int::first-solution-value
-                                          '?f `(rob-int:robot-base-frame ,robot-name ?f))
-                                         (error "SETUP-BULLET-WORLD: the robot ~s has no base ~
-                                                 frame fact." robot-name)))
+          ;; the frame of the robot's pose in the belief state (its root), which CRAM-TF
+          ;; reports as the robot's pose; the ROBOT-BASE-FRAME fact (base_link) names the torso
+          cram-tf:*robot-base-frame* *pepper-root-link*)
     (btw-tut::fresh-world)
     (let ((world btr:*current-bullet-world*))
       (btr:add-object world :static-plane :floor '((0 0 0) (0 0 0 1))

@@ -12,7 +12,12 @@
 (in-package :cram-native-bench)
 
 (defparameter *native-dir* (asdf:system-relative-pathname "cram-plans/cram-native" "projection/native/"))
-(defparameter *pr2-urdf* #p"/work/shared/models/pr2_description/urdf/pr2.urdf")
+(defparameter *shared-models*
+  (let ((dir (uiop:merge-pathnames* (make-pathname :directory '(:relative :up "shared" "models"))
+                                    (asdf:system-source-directory "cram-plans"))))
+    (namestring (or (probe-file dir) dir)))
+  "../shared/models/ beside the checkout: reference models tests may read, never commit.")
+(defparameter *pr2-urdf* (merge-pathnames "pr2_description/urdf/pr2.urdf" *shared-models*))
 
 (defun chain-urdf (n)
   "URDF of a chain of N revolute joints (axes alternating z and y) with box links, the robot
@@ -111,7 +116,7 @@ solver with random restarts on the same kind of poses, or NIL when it cannot run
    (let ((out (cram-bench:run-peer (namestring (merge-pathnames "build/ik_bench" *native-dir*))
                                    (namestring *ik-urdf*) "--machine" "--poses" "1"
                                    "--peer" (princ-to-string *ik-peer-poses*)
-                                   "--search-dir" "/work/shared/models"
+                                   "--search-dir" *shared-models*
                                    "--tip" "l_wrist_roll_link" "--tip" "r_wrist_roll_link")))
      (when out
        (with-input-from-string (s out)
@@ -167,7 +172,7 @@ seeds within the limits; add a row with the mean time, the solved share and the 
 (defun ik-rows ()
   "The IK rows of the native benchmark (both PR2 arms)."
   (when (probe-file *ik-urdf*)
-    (add-search-dir "/work/shared/models")
+    (add-search-dir *shared-models*)
     (let ((peers (ik-peer-times)))
       (with-world (w)
         (let ((r (add-urdf w (uiop:read-file-string *ik-urdf*))))

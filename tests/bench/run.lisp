@@ -1,5 +1,6 @@
 ;;;; `make bench': load every tests/bench/*-bench.lisp (each loads the systems it measures),
-;;;; run the benchmarks and print one table.
+;;;; run the benchmarks and print one table. plans-soak-bench.lisp is the memory soak, a
+;;;; 20 000-run campaign (CRAM_SOAK_RUNS=N for another size, 0 to skip it).
 
 (require :asdf)
 (handler-bind ((warning #'muffle-warning))

@@ -77,24 +77,58 @@ marker character (#\\- #\\+ or #\\Space) and the cells."
              (if pos (setf start (1+ pos)) (return)))
     (nreverse cells)))
 
+(defun fold-blanks (s)
+  "S with no-break spaces as spaces, runs of blanks as one space, trimmed."
+  (let ((out (make-string-output-stream)) (blank nil))
+    (loop for c across (trim s)
+          do (if (member c '(#\Space #\Tab #\No-break_space))
+                 (setf blank t)
+                 (progn (when blank (write-char #\Space out)) (setf blank nil) (write-char c out))))
+    (get-output-stream-string out)))
+
+(defun common-ends (a b)
+  "The length of the common prefix plus that of the common suffix of A and B."
+  (let* ((p (or (mismatch a b) (length a)))
+         (s (let ((m (mismatch a b :from-end t)))
+              (if m (- (length a) m) (length a)))))
+    (+ p (min s (- (min (length a) (length b)) p)))))
+
+(defun split-changed-row (body)
+  "BODY is a changed row without its leading `-': `old+new', where the `+' that separates
+the sides may follow a no-break space or the old text directly. Of the `+' characters, the
+one whose sides read most alike (common prefix and suffix) separates them; ties go to the
+first. Returns OLD and NEW (NEW is NIL when the row has no `+')."
+  (let ((best nil) (best-score -1))
+    (loop for i = (position #\+ body) then (position #\+ body :start (1+ i))
+          while i
+          do (let ((score (common-ends (fold-blanks (subseq body 0 i))
+                                       (fold-blanks (subseq body (1+ i))))))
+               (when (> score best-score) (setf best i best-score score))))
+    (if best
+        (values (subseq body 0 best) (subseq body (1+ best)))
+        (values body nil))))
+
 (defun nbsp-diff-side (line side)
-  "The text of one row of a side-by-side diff (rows `-old<nbsp>+new', ` old<nbsp> new',
-`<nbsp>+new') on SIDE (:OLD or :NEW)."
-  (let* ((plus (search (format nil "~c+" #\No-break_space) line))
-         (minus (and (plusp (length line)) (char= (char line 0) #\-))))
-    (cond (plus
-           (if (eq side :new) (string-right-trim '(#\No-break_space #\Space) (subseq line (+ plus 2)))
-               (if minus (subseq line 1 plus) "")))
-          (minus (if (eq side :old) (string-right-trim '(#\No-break_space) (subseq line 1)) ""))
-          (t ;; unchanged: the same text twice
-           (let* ((s (string-left-trim " " line))
-                  (s (if (and (plusp (length s)) (char= (char s 0) #\No-break_space)) (subseq s 1) s))
-                  (n (length s)))
-             (loop for k from (floor n 2) downto 1
-                   when (and (<= (* 2 k) n)
-                             (string= (trim (subseq s 0 k)) (trim (subseq s k))))
-                     do (return (subseq s 0 k))
-                   finally (return s)))))))
+  "The text of one row of a side-by-side diff on SIDE (:OLD or :NEW). Rows: `-old+new' (a
+changed row; the `+' may follow a no-break space or the old text directly), `-old' (deleted),
+`<nbsp>+new' (added), `<nbsp>text<nbsp>text' (unchanged: the same text twice). A row that
+begins a hunk carries one extra leading space."
+  (let* ((l (if (and (plusp (length line)) (char= (char line 0) #\Space)) (subseq line 1) line))
+         (n (length l)))
+    (flet ((clean (s) (string-right-trim '(#\No-break_space #\Space) s)))
+      (cond ((and (plusp n) (char= (char l 0) #\-))
+             (multiple-value-bind (old new) (split-changed-row (subseq l 1))
+               (if (eq side :old) (clean old) (if new (clean new) ""))))
+            ((and (>= n 2) (char= (char l 0) #\No-break_space) (char= (char l 1) #\+))
+             (if (eq side :new) (clean (subseq l 2)) ""))
+            (t ;; unchanged: the same text twice
+             (let* ((s (if (and (plusp n) (char= (char l 0) #\No-break_space)) (subseq l 1) l))
+                    (n (length s)))
+               (loop for k from (floor n 2) downto 1
+                     when (and (<= (* 2 k) n)
+                               (string= (trim (subseq s 0 k)) (trim (subseq s k))))
+                       do (return (subseq s 0 k))
+                     finally (return s))))))))
 
 (defun plain-lines (line side)
   "A plain page: every line is the text itself."
@@ -229,13 +263,33 @@ was printed, and the page's shown output per input form."
              (error () "#<unprintable>"))))
     (if (> (length s) 160) (concatenate 'string (subseq s 0 157) "...") s)))
 
+(defun comments-only-p (text pos)
+  "Whether TEXT from POS on holds nothing but blank lines and `;' comments."
+  (loop for line in (uiop:split-string (subseq text pos) :separator '(#\Newline))
+        for s = (trim line)
+        always (or (string= s "") (char= (char s 0) #\;))))
+
+(defun call-with-log-stream (stream thunk)
+  "Call THUNK with CPL:*LOG-STREAM* (when cram-plans is loaded) bound to STREAM, so the log
+lines a form writes are part of what it printed."
+  (let ((log (find-symbol "*LOG-STREAM*" "CRAM-LANGUAGE")))
+    (if log
+        (progv (list log) (list stream) (funcall thunk))
+        (funcall thunk))))
+
+(defmacro with-log-stream ((stream) &body body)
+  "Run BODY with the CRAM log lines going to STREAM as well (see CALL-WITH-LOG-STREAM)."
+  `(call-with-log-stream ,stream (lambda () ,@body)))
+
 (defun replay-text (text &key (package "CL-USER") (evaluate t))
   "Paste TEXT into this image's REPL: every input form is read in the package of the latest
 prompt and evaluated in turn (unless EVALUATE is NIL). Returns a RESULT. A form that signals
 aborts the replay with that condition, as it would abort the user's paste."
   (let ((*package* (or (find-package package) (find-package "CL-USER")))
         (pos 0) (n (length text)) (forms '()) (shown '()) (values '())
-        (out (make-string-output-stream)))
+        (out (make-string-output-stream))
+        ;; a symbol typed right after a prompt (`DEMO> btr:*current-bullet-world*') is input too
+        (after-prompt nil))
     (let ((echo (make-broadcast-stream *standard-output* out)))
       (loop
         (setf pos (skip-blank text pos))
@@ -245,18 +299,28 @@ aborts the replay with that condition, as it would abort the user's paste."
                  (let ((p (find-package (string-upcase name))))
                    (if p (setf *package* p)
                        (error "the page's prompt ~a> names no package of this image" name)))
-                 (setf pos after))
+                 (setf pos after after-prompt t))
                 (t
                  (let ((form nil) (end nil))
                    (handler-case (multiple-value-setq (form end) (read-from-string text t nil :start pos))
                      (reader-error () (setf end nil))
-                     (end-of-file () (error "an unfinished form at ~s" (subseq text pos (min n (+ pos 60))))))
-                   (cond ((and end (input-form-p form))
+                     (end-of-file ()
+                       ;; only comments left (e.g. `; Evaluation aborted on ...'): shown output
+                       (if (and shown (comments-only-p text pos))
+                           (setf end nil)
+                           (error "an unfinished form at ~s" (subseq text pos (min n (+ pos 60)))))))
+                   (cond ((and end (or (input-form-p form)
+                                       (and after-prompt form (symbolp form)
+                                            (not (keywordp form)))))
                           (push form forms) (push "" shown)
-                          (setf pos end)
+                          (setf pos end after-prompt nil)
                           (when evaluate
                             (let ((*standard-output* echo) (*trace-output* echo))
-                              (setf values (multiple-value-list (eval form))))
+                              ;; CRAM-shaped log lines go to CPL:*LOG-STREAM*: keep them too
+                              (with-log-stream (echo)
+                                (setf values (multiple-value-list (eval form)))))
+                            ;; as the REPL does: * ** *** hold the latest values
+                            (setf *** ** ** * * (first values))
                             (format t "~&;; => ~{~s~^, ~}~%" (mapcar #'short values))))
                          (t
                           (let ((next (next-prompt-position text pos)))

@@ -1,0 +1,111 @@
+;;;; The era's designator vocabulary: location designators ((:to :see) (:to :reach) (:obj ...)
+;;;; (:side ...) (:on "CounterTop") (:name "iai_kitchen_..._counter_top")), object designators
+;;;; with (:at ...), the motion MOVING-JOINTS and the action LOOKING-AT, mapped onto today's
+;;;; (:visible-for ...) (:reachable-for ...) (:object ...) (:arm ...) (:on <surface object>),
+;;;; (:location ...), MOVING-ARM-JOINTS and LOOKING. An unknown location key is an error that
+;;;; names it and the keys that exist.
+
+(in-package :cram-plans-compat)
+
+(defparameter *modern-location-keys*
+  '(:pose :poses :location :object :target :visible-for :reachable-for :on :for :arm
+    :urdf-name :part-of :name :type :frame)
+  "The keys today's location generators and costmaps read.")
+
+(defparameter *old-location-keys* '(:to :obj :side)
+  "The era's keys this layer translates.")
+
+(defun known-location-keys ()
+  "Every key a location designator may have."
+  (append *modern-location-keys* *old-location-keys*))
+
+(defun unknown-location-key-error (designator key)
+  (error "Location designator ~a: the key ~s is unknown. The keys that exist: ~{~(~s~)~^ ~}."
+         designator key (known-location-keys)))
+
+(defun old-surface-link (name environment)
+  "The link of ENVIRONMENT the era's semantic-map NAME (e.g. \"iai_kitchen_kitchen_island_counter_top\")
+means: NAME itself, else without the iai_kitchen_ prefix, with _counter_top read as _surface."
+  (let* ((links (btr:link-names environment))
+         (bare (if (uiop:string-prefix-p "iai_kitchen_" name) (subseq name 12) name))
+         (surface (if (uiop:string-suffix-p bare "_counter_top")
+                      (concatenate 'string (subseq bare 0 (- (length bare) 12)) "_surface")
+                      bare)))
+    (or (find name links :test #'string=)
+        (find surface links :test #'string=)
+        (find bare links :test #'string=)
+        (error "Location designator (:name ~s): no link of ~s is called ~s or ~s. Surfaces: ~{~a~^ ~}."
+               name (btr:name environment) name surface
+               (remove-if-not (lambda (l) (search "surface" l)) links)))))
+
+(defun current-robot ()
+  (rob-int:current-robot-name))
+
+(defun modern-object (designator)
+  "DESIGNATOR (an object designator) with (:at X) read as (:location X)."
+  (if (and (typep designator 'desig:object-designator)
+           (assoc :at (desig:properties designator)))
+      (desig:make-designator :object (mapcar (lambda (p) (if (eq (first p) :at) (cons :location (rest p)) p))
+                                             (desig:properties designator)))
+      designator))
+
+(defun modern-location-description (designator)
+  "The properties today's generators understand for the era's location DESIGNATOR, or NIL when
+it has no old key. Signals an error naming an unknown key."
+  (let ((props (desig:properties designator)))
+    (dolist (p props)
+      (unless (member (first p) (known-location-keys))
+        (unknown-location-key-error designator (first p))))
+    (let ((on (second (assoc :on props))) (name (second (assoc :name props))))
+      (when (or (some (lambda (p) (member (first p) *old-location-keys*)) props)
+                (and (stringp on) name))
+        (loop for (key value) in props
+              append (case key
+                       (:to (case value
+                              (:see (list (list :visible-for (current-robot))))
+                              (:reach (list (list :reachable-for (current-robot))))
+                              (t (error "Location designator ~a: (:to ~s) is unknown; the era's ~
+                                         values are :SEE and :REACH." designator value))))
+                       ((:obj :object) (list (list :object (modern-object value))))
+                       (:side (list (list :arm value)))
+                       (:on (if (stringp value)
+                                (let ((env (or (btr:get-environment-object)
+                                               (error "Location designator ~a: (:on ~s) needs an ~
+                                                       environment in the belief state." designator value))))
+                                  (list (list :on (desig:make-designator
+                                                   :object `((:type :counter-top)
+                                                             (:urdf-name ,(old-surface-link (or name value) env))
+                                                             (:part-of ,(btr:name env)))))))
+                                (list (list :on value))))
+                       (:name (if (stringp on) '() (list (list :name value))))
+                       (t (list (list key value)))))))))
+
+(defun compat-location-generator (designator)
+  "Candidates of the era's location DESIGNATOR: the solutions of its modern equivalent."
+  (let ((modern (modern-location-description designator)))
+    (if modern
+        (desig:designator-solutions (desig:make-designator :location modern))
+        '())))
+
+(desig:register-location-generator 1 compat-location-generator
+  "The era's location vocabulary ((:to :see), (:to :reach), (:on \"CounterTop\") ...).")
+
+;;; ---- motions and actions -----------------------------------------------------------------
+
+(pushnew :moving-joints common-desig:*known-motion-types*)
+
+(def-fact-group compat-motions (desig:motion-grounding)
+  (<- (desig:motion-grounding ?d (common-desig::move-joints ?left ?right))
+    (desig:desig-prop ?d (:type :moving-joints))
+    (once (or (desig:desig-prop ?d (:left-configuration ?left)) (== ?left nil)))
+    (once (or (desig:desig-prop ?d (:right-configuration ?right)) (== ?right nil)))
+    (or (lisp-pred identity ?left) (lisp-pred identity ?right))))
+
+(def-fact-group compat-process-modules (cpm:matching-process-module)
+  (<- (cpm:matching-process-module ?d urdf-proj::urdf-proj-arms)
+    (desig:desig-prop ?d (:type :moving-joints))))
+
+(pp-plans::def-action-grounding :looking-at (d)
+  (pp-plans:ground-action
+   :looking (desig:make-designator :action (cons '(:type :looking)
+                                                 (remove :type (desig:properties d) :key #'first)))))
