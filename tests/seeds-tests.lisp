@@ -42,8 +42,9 @@ and its whole output; the output is also kept in out/seeds/seed-NUMBER.log."
       (values (sb-ext:process-exit-code process) line out))))
 
 (defun seed-numbers ()
-  (sort (mapcar (lambda (p) (subseq (pathname-name p) 5))
-                (directory (merge-pathnames "seed-*.lisp" (seed-directory))))
+  (sort (remove-if-not (lambda (n) (and (= (length n) 3) (every #'digit-char-p n)))
+                       (mapcar (lambda (p) (subseq (pathname-name p) 5))
+                               (directory (merge-pathnames "seed-*.lisp" (seed-directory)))))
         #'string<))
 
 (test seed-replays

@@ -9,7 +9,10 @@
 (push (merge-pathnames "../../" cl-user::*seed-directory*) asdf:*central-registry*)
 (handler-bind ((warning #'muffle-warning))
   (asdf:load-system "cram-plans"))
+(require :sb-posix)
+(require :sb-bsd-sockets)
 (load (merge-pathnames "harness.lisp" cl-user::*seed-directory*))
+(load (merge-pathnames "private-ros.lisp" cl-user::*seed-directory*))
 
 (defun cl-user::seed-run (number)
   "Replay seed NUMBER (a string such as \"000\")."
