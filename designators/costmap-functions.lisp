@@ -5,7 +5,7 @@
 (defun point-xy (point what)
   "(values x y) as double-floats of POINT: a 3D-VECTOR, a pose (its origin), or a list (x y ...)."
   (flet ((ok (x y)
-           (unless (and (realp x) (realp y) (not (and (floatp x) (sb-ext:float-nan-p x))) (not (and (floatp y) (sb-ext:float-nan-p y))) (< (abs x) 1d6) (< (abs y) 1d6))
+           (unless (and (finite-real-p x) (finite-real-p y) (< (abs x) 1d6) (< (abs y) 1d6))
              (error "~a: the point ~s has non-finite or non-real coordinates." what point))
            (return-from point-xy (values (to-double x) (to-double y)))))
     (typecase point
@@ -17,7 +17,7 @@
       (t (error "~a: the point ~s, expected a 3D-VECTOR, a pose or a list (x y ...)." what point)))))
 
 (defun positive-real (value what)
-  (unless (and (realp value) (> value 0) (< value 1d6))
+  (unless (and (finite-real-p value) (> value 0) (< value 1d6))
     (error "~a is ~s, expected a positive real." what value))
   (coerce value 'double-float))
 
@@ -66,7 +66,7 @@ from MEAN along x or y."
   "A cost function that is 1 within DISTANCE metres (horizontally) of POINT and 0 farther;
 with INVERT, 0 within DISTANCE and 1 farther."
   (multiple-value-bind (px py) (point-xy point "MAKE-RANGE-COST-FUNCTION point")
-    (unless (and (realp distance) (>= distance 0) (< distance 1d6))
+    (unless (and (finite-real-p distance) (>= distance 0) (< distance 1d6))
       (error "MAKE-RANGE-COST-FUNCTION: the distance is ~s, expected a non-negative real." distance))
     (let* ((d (to-double distance)) (d2 (* d d)))
       (declare (type double-float d2 px py))

@@ -17,6 +17,12 @@ made from now on sample the same poses as after any earlier (SEED-COSTMAPS SEED)
   (setf *costmap-random-state* (sb-ext:seed-random-state seed))
   seed)
 
+(defun finite-real-p (x)
+  "True for a real that is neither NaN nor an infinity (test this before comparing X: a
+comparison with NaN traps)."
+  (and (realp x)
+       (not (and (floatp x) (or (sb-ext:float-nan-p x) (sb-ext:float-infinity-p x))))))
+
 (defun to-double (x)
   "The real X as a double-float; single-floats by their shortest decimal value, so that 0.1
 becomes 0.1d0 rather than 0.10000000149011612d0."
@@ -124,11 +130,11 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
          (origin-x (or origin-x (first origin)))
          (origin-y (or origin-y (second origin))))
     (loop for (what value) in `(("width" ,width) ("height" ,height) ("resolution" ,resolution))
-          unless (and (realp value) (> value 0) (< value 1d4))
+          unless (and (finite-real-p value) (> value 0) (< value 1d4))
             do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a positive real (metres)."
                       what value))
     (loop for (what value) in `(("origin x" ,origin-x) ("origin y" ,origin-y))
-          unless (and (realp value) (not (and (floatp value) (sb-ext:float-nan-p value))) (< (abs value) 1d6))
+          unless (and (finite-real-p value) (< (abs value) 1d6))
             do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a finite real." what value))
     (when (> (/ (* width height) (* resolution resolution)) 2.5d7)
       (error "MAKE-LOCATION-COSTMAP: ~s x ~s m at ~s m resolution is more than 25 million ~
@@ -246,7 +252,7 @@ height generators of all of them."
           :initial-value nil))
 
 (defun check-cell-value (costmap name value x y)
-  (unless (and (realp value) (>= value 0) (< value most-positive-double-float))
+  (unless (and (finite-real-p value) (>= value 0))
     (error 'invalid-probability-distribution
            :costmap costmap
            :reason (format nil "the cost function ~(~a~) gave ~s at (~,3f ~,3f), expected a ~
@@ -269,7 +275,8 @@ FUNCTION (x y) at their centres."
                             (check-cell-value costmap name v x y)
                             (setf v (coerce v 'double-float)))
                           (locally (declare (type double-float v))
-                            (unless (and (>= v 0d0) (< v most-positive-double-float))
+                            (unless (and (not (sb-ext:float-nan-p v)) (>= v 0d0)
+                                         (< v most-positive-double-float))
                               (check-cell-value costmap name v x y))
                             (setf (aref matrix r c) (* (aref matrix r c) v))))))))
 
@@ -293,6 +300,12 @@ index; computed once and cached until another function is registered."
 
 (defun get-map-value (costmap x y)
   "The value of COSTMAP's cell containing the map point (X Y); 0 outside the grid."
+  (unless (typep costmap 'location-costmap)
+    (error "GET-MAP-VALUE: ~s is not a location costmap (see MAKE-LOCATION-COSTMAP)." costmap))
+  (loop for (what value) in `(("x" ,x) ("y" ,y))
+        unless (finite-real-p value)
+          do (error "GET-MAP-VALUE: the ~a coordinate is ~s, expected a finite real (metres)."
+                    what value))
   (let* ((m (get-cost-map costmap))
          (c (floor (- x (origin-x costmap)) (resolution costmap)))
          (r (floor (- y (origin-y costmap)) (resolution costmap))))

@@ -52,10 +52,31 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
   "TERM resolved for a call into Lisp: unbound variables appear as their ?symbols."
   (resolve-term term (lambda (v) (declare (ignore v)) (make-symbol "?_"))))
 
+(defvar *lisp-error-propagating-functions* (make-hash-table :test 'eq :synchronized t)
+  "Names of the functions registered with PROPAGATE-LISP-ERRORS.")
+
+(defun propagate-lisp-errors (&rest function-names)
+  "Declare that errors signalled by the functions named FUNCTION-NAMES (symbols naming global
+functions) propagate out of the Prolog query when LISP-FUN or LISP-PRED calls them, whatever
+*BREAK-ON-LISP-ERRORS* says. The rule: a predicate that changes the world (an assert, retract
+or simulation step, as CRAM's Bullet-world assert handlers) reports bad input with a Lisp error;
+a query predicate, whose failure is the documented answer, keeps warning and failing.
+Returns FUNCTION-NAMES."
+  (dolist (name function-names function-names)
+    (check-type name symbol)
+    (setf (gethash name *lisp-error-propagating-functions*) t)))
+
+(defun lisp-errors-propagate-p (function)
+  "True when errors from FUNCTION (a function object or a symbol) propagate out of queries."
+  (let ((name (cond ((symbolp function) function)
+                    ((functionp function) (ignore-errors (sb-kernel:%fun-name function))))))
+    (and name (symbolp name) (gethash name *lisp-error-propagating-functions*))))
+
 (defun call-lisp (function args)
-  "Apply FUNCTION to ARGS. Returns (values result t), or, when it signals an error and
-*BREAK-ON-LISP-ERRORS* is NIL, warns and returns (values nil nil)."
-  (if *break-on-lisp-errors*
+  "Apply FUNCTION to ARGS. Returns (values result t), or, when it signals an error,
+*BREAK-ON-LISP-ERRORS* is NIL and FUNCTION was not registered with PROPAGATE-LISP-ERRORS,
+warns and returns (values nil nil)."
+  (if (or *break-on-lisp-errors* (lisp-errors-propagate-p function))
       (values (apply function args) t)
       (handler-case (values (apply function args) t)
         (error (e)

@@ -24,7 +24,9 @@ elements long)."
 
 (defvar *break-on-lisp-errors* nil
   "When NIL, a Lisp error inside LISP-FUN, LISP-PRED (and the other predicates calling Lisp
-functions) prints a warning and the goal fails. When true, the error is signalled.")
+functions) prints a warning and the goal fails. When true, the error is signalled. Errors of
+the functions registered with PROPAGATE-LISP-ERRORS (those behind predicates that change
+something: assert, retract, simulate) are always signalled.")
 
 (defvar *database-lock* (sb-thread:make-mutex :name "cram-prolog database")
   "Protects the predicate table, the fact groups and the compilation of predicates.")

@@ -32,7 +32,10 @@ Decisions on CRAM's quirks:
   symbol of another package that has no definition but shares a built-in's name (CPL:FAIL, ...)
   calls that built-in.
 - Lisp errors inside LISP-FUN, LISP-PRED and the other Lisp-calling built-ins warn and fail unless
-  *BREAK-ON-LISP-ERRORS* is true. Unbound variables reach Lisp as uninterned ?symbols.
+  *BREAK-ON-LISP-ERRORS* is true, or the function called was registered with
+  PROPAGATE-LISP-ERRORS: the functions behind predicates that change something (the Bullet
+  world's assert and retract forms, SIMULATE, STEP) signal their errors out of the query, as
+  CRAM's assert handlers do; query predicates keep failing. Unbound variables reach Lisp as uninterned ?symbols.
 - ?symbols are variables in queries, clauses and goals given to CALL; values produced by Lisp
   code are constants, except in the binding alists a handler returns.
 - Queries given as the same (constant) list are compiled once: do not modify a goal list after
@@ -41,7 +44,8 @@ Decisions on CRAM's quirks:
   (:export
    ;; queries and definitions
    #:prolog #:def-fact-group #:<- #:def-prolog-handler #:remove-prolog-handler
-   #:*break-on-lisp-errors* #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
+   #:*break-on-lisp-errors* #:propagate-lisp-errors #:lisp-errors-propagate-p
+   #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
    #:fact-group-names #:fact-group-clauses #:remove-fact-group #:predicate-clauses
    #:add-fact #:remove-facts #:predicate
    ;; native predicates

@@ -165,6 +165,18 @@ Returns the list of (case outcome text)."
 it is (the compiler would wrap it in a COMPILED-PROGRAM-ERROR)."
   (let ((sb-ext:*evaluator-mode* :interpret)) (eval form)))
 
+(defun bad-input-checked-double (x)
+  "A query helper: its errors make the goal fail (warn-and-fail, the default)."
+  (unless (numberp x) (error "BAD-INPUT-CHECKED-DOUBLE: ~s is not a number" x))
+  (* 2 x))
+
+(defun bad-input-checked-triple (x)
+  "A command helper registered with PROPAGATE-LISP-ERRORS: its errors leave the query."
+  (unless (numberp x) (error "BAD-INPUT-CHECKED-TRIPLE: ~s is not a number" x))
+  (* 3 x))
+
+(prolog:propagate-lisp-errors 'bad-input-checked-triple)
+
 (defun query (goal &optional bindings)
   "All solutions of GOAL."
   (force-ll (prolog goal bindings)))
@@ -242,6 +254,9 @@ it is (the compiler would wrap it in a COMPILED-PROGRAM-ERROR)."
   (lisp-fun-undefined :error (query '(prolog:lisp-fun bad-input-no-such-function 1 ?x))
    :match "BAD-INPUT-NO-SUCH-FUNCTION")
   (lisp-pred-bad-args :fails (query '(prolog:lisp-pred evenp foo)))
+  (lisp-fun-query-error-fails :fails (query '(prolog:lisp-fun bad-input-checked-double foo ?x)))
+  (lisp-fun-propagating-error :error
+   (query '(prolog:lisp-fun bad-input-checked-triple foo ?x)) :match "FOO")
   (symbol-value-number :error (query '(symbol-value 42 ?v)) :match "42")
   (set-symbol-value-number :error (query '(prolog:set-symbol-value 42 1)) :match "42")
   (length-negative :error (query '(length ?l -1)) :match "-1")

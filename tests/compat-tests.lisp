@@ -21,7 +21,7 @@
   (dolist (f '(cram-occupancy-grid-costmap:init-occupancy-grid-costmap btr-belief:ros-time-init
                cram-location-costmap:location-costmap-vis-init cram-tf:init-tf))
     (is (fboundp f))
-    (is (member f roslisp-utilities:*ros-init-functions*) "~s is not a ROS init function" f)))
+    (is-true (nth-value 1 (gethash f roslisp-utilities:*ros-init-functions*)) "~s is not a ROS init function" f)))
 
 (test compat-occupancy-grid
   "init-occupancy-grid-costmap reads the kitchen map: walls occupied, the room free."

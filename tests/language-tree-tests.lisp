@@ -154,6 +154,28 @@
              (is (search "FAILURE-A" text))))
       (when (probe-file path) (delete-file path)))))
 
+(deftest task-tree-html-links-pictures-and-folds-designators
+  (let* ((dir (format nil "/tmp/cram-language-pics-~d/" (get-universal-time)))
+         (path (concatenate 'string dir "tree.html")))
+    (named-top-level (:name 'pictured)
+      (cpl:with-task-tree-node (:motion 'moving :designator "(A MOTION (TYPE GOING))")
+        (cpl:note-picture (concatenate 'string dir "001-going.png"))))
+    (is (equal (list (concatenate 'string dir "001-going.png"))
+               (cpl:node-pictures (node-named 'moving))))
+    (is (equal "ignored.png" (cpl:note-picture "ignored.png" nil)) "outside a plan: nothing noted")
+    (unwind-protect
+         (progn
+           (cpl:write-task-tree-html path)
+           (let ((text (alexandria:read-file-into-string path)))
+             (is (search "href=\"001-going.png\"" text) "the picture is linked relative to the page")
+             (is (search "<details class=\"desig\"><summary>designator</summary>" text)
+                 "the designator is folded away")
+             (is (not (search "<details class=\"desig\" open" text)))
+             (is (search " UTC" text) "times are human times")
+             (is (search "(A MOTION (TYPE GOING))" text))))
+      (uiop:delete-directory-tree (uiop:ensure-directory-pathname dir) :validate t
+                                                                       :if-does-not-exist :ignore))))
+
 ;;; Logging
 
 (deftest log-line-shape

@@ -47,11 +47,34 @@ and its whole output; the output is also kept in out/seeds/seed-NUMBER.log."
                                (directory (merge-pathnames "seed-*.lisp" (seed-directory)))))
         #'string<))
 
+(defparameter *known-short*
+  '()
+  "Seeds that do not replay completely yet: (NUMBER MINIMUM REASON). The replay must still
+reach MINIMUM blocks (a ratchet against regressions) while its line shows the honest K/N.
+An entry is removed once its seed replays N/N.")
+
+(defun verdict-counts (line)
+  "K and N of a `seed NNN: K/N blocks' LINE, or NIL."
+  (let* ((colon (and line (search ": " line)))
+         (slash (and colon (position #\/ line :start colon))))
+    (when slash
+      (values (parse-integer line :start (+ colon 2) :end slash :junk-allowed t)
+              (parse-integer line :start (1+ slash) :junk-allowed t)))))
+
 (test seed-replays
-  "Every seed page replays completely (K = N blocks)."
+  "Every seed page replays completely (K = N blocks), or, for a seed listed in *KNOWN-SHORT*, at
+least its recorded minimum."
   (dolist (n (seed-numbers))
     (multiple-value-bind (code line out) (run-seed n)
-      (is (eql 0 code) "seed ~a: ~a~%~a" n (or line "no verdict")
-          (let ((fails (remove-if-not (lambda (l) (search ";; FAIL" l))
-                                      (uiop:split-string out :separator '(#\Newline)))))
-            (format nil "~{~a~%~}" (subseq fails 0 (min 20 (length fails)))))))))
+      (let ((short (assoc n *known-short* :test #'string=))
+            (fails (let ((f (remove-if-not (lambda (l) (search ";; FAIL" l))
+                                           (uiop:split-string out :separator '(#\Newline)))))
+                     (format nil "~{~a~%~}" (subseq f 0 (min 20 (length f)))))))
+        (if (and short (not (eql 0 code)))
+            (let ((k (verdict-counts line)))
+              (format t "~&;; seed ~a is known to be short (~a): at least ~d blocks required~%"
+                      n (third short) (second short))
+              (is (and k (>= k (second short)))
+                  "seed ~a: ~a, below its recorded minimum ~d~%~a" n (or line "no verdict")
+                  (second short) fails))
+            (is (eql 0 code) "seed ~a: ~a~%~a" n (or line "no verdict") fails))))))

@@ -504,10 +504,17 @@ success rate."
                (handler-case (progn (btw-tut:test-switch-two-bottles) t)
                  (error (e) (format t "~&FAILURE: ~a~%" e) nil))))
             (t
+             ;; the README's recipe: (init-projection) (spawn-products-one) (interaction)
              (demo:init-projection)
+             (demo:spawn-products-one)
              (let ((btr:*snapshot-directory* (and dir (namestring dir)))
                    (*standard-input* (make-string-input-stream (or (getf options :input) "2"))))
-               (handler-case (progn (demo:interaction) t)
+               (handler-case
+                   (multiple-value-bind (product found) (demo:interaction)
+                     (cond ((and product (not found))
+                            (format t "~&FAILURE: ~(~a~) not found~%" product)
+                            nil)
+                           (t t)))
                  (error (e) (format t "~&FAILURE: ~a~%" e) nil))))))))
 
 (defun run-command-line (&optional (args (rest sb-ext:*posix-argv*)))

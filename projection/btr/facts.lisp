@@ -60,9 +60,29 @@
                                      (cl-transforms:z lo))
        (cl-transforms:orientation p)))))
 
+(defun prolog-set-object-pose (world name pose)
+  "ASSERT of (object-pose NAME POSE): teleport the object NAME; an error naming NAME when WORLD
+has no such object, or naming POSE when it is not a pose."
+  (set-object-pose (ensure-object world name) pose))
+
+(defun prolog-set-joint-state (world robot joint-states)
+  "ASSERT of (joint-state ROBOT JOINT-STATES) on the articulated object ROBOT (object or name)."
+  (let ((o (ensure-object world robot)))
+    (unless (typep o 'robot-object)
+      (btr-fail "joint-state: ~s is not an articulated object (it has no joints)" (name o)))
+    (set-robot-state-from-joints joint-states o)))
+
 (defun set-object-pose (object pose)
   "Teleport OBJECT to POSE (anything ENSURE-POSE accepts)."
   (setf (pose object) (ensure-pose pose (format nil "pose of ~s" (name object)))))
+
+;;; The rule for errors: the Lisp functions behind predicates that change the world (the assert
+;;; and retract forms, SIMULATE, STEP) signal their errors out of the query, as CRAM's assert
+;;; handlers do (see PROLOG:PROPAGATE-LISP-ERRORS); query predicates (OBJECT, POSE, CONTACT,
+;;; STABLE ...) warn and fail on a Lisp error, failure being their documented answer.
+(prolog:propagate-lisp-errors 'prolog-add-object 'remove-object 'prolog-set-object-pose
+                              'prolog-set-pose-on 'prolog-set-joint-state 'prolog-attach
+                              'prolog-detach 'simulate 'step)
 
 ;;; ---- worlds and objects ----------------------------------------------------------------------------
 
@@ -133,8 +153,7 @@
     (retract ?world (object ?name)))
 
   (<- (assert ?world (object-pose ?name ?pose))
-    (%object ?world ?name ?o)
-    (lisp-fun set-object-pose ?o ?pose ?_))
+    (lisp-fun prolog-set-object-pose ?world ?name ?pose ?_))
   (<- (assert (object-pose ?world ?name ?pose))
     (assert ?world (object-pose ?name ?pose)))
   (<- (assert ?world (object-pose-on ?name ?pose))
@@ -143,8 +162,7 @@
     (assert ?world (object-pose-on ?name ?pose)))
 
   (<- (assert ?world (joint-state ?robot ?joint-states))
-    (%object ?world ?robot ?o)
-    (lisp-fun set-robot-state-from-joints ?joint-states ?o ?_))
+    (lisp-fun prolog-set-joint-state ?world ?robot ?joint-states ?_))
   (<- (assert (joint-state ?world ?robot ?joint-states))
     (assert ?world (joint-state ?robot ?joint-states)))
 

@@ -5,6 +5,16 @@
 
 ;;; ---- numbers and poses ---
 
+(defparameter *max-coordinate* 1d6
+  "Largest magnitude (metres) of a position coordinate given to a world (object poses): a
+larger one is refused with an error naming it (Bullet loses all precision far beyond).")
+
+(defparameter *max-size* 1d4
+  "Largest size, radius or height (metres) of an object added to a world.")
+
+(defparameter *max-mass* 1d6
+  "Largest mass (kg) of an object added to a world.")
+
 (defun to-double (x)
   "The real X as a double float; a single float by its printed decimal (0.2 → 0.2d0)."
   (if (typep x 'single-float)
@@ -39,6 +49,10 @@ or (x y z) (identity orientation)."
     (loop for x across v
           unless (< (abs x) most-positive-double-float)
             do (btr-fail "~a ~s has a non-finite component" what pose))
+    (loop for i below 3
+          unless (<= (abs (aref v i)) *max-coordinate*)
+            do (btr-fail "~a ~s: coordinate ~s is beyond ~g m (BTR::*MAX-COORDINATE*)"
+                         what pose (aref v i) *max-coordinate*))
     v))
 
 (defun vector->pose (v &optional (offset 0))
@@ -275,16 +289,20 @@ symbol or string is taken as a one-element list; strings become keywords)."))
 ;;; ---- primitive kinds ----------------------------------------------------------------------------
 
 (defun mass-arg (mass what)
-  (unless (and (realp mass) (>= mass 0)) (btr-fail "~a: mass ~s, expected a real >= 0" what mass))
+  (unless (and (finite-real-p mass) (>= mass 0) (<= mass *max-mass*))
+    (btr-fail "~a: mass ~s, expected a real from 0 to ~g kg (BTR::*MAX-MASS*)" what mass *max-mass*))
   (coerce mass 'double-float))
 
 (defun size-arg (size what)
-  (unless (and (listp size) (= (length size) 3) (every (lambda (s) (and (realp s) (> s 0))) size))
-    (btr-fail "~a: size ~s, expected (x y z) with positive reals" what size))
+  (unless (and (listp size) (= (length size) 3)
+               (every (lambda (s) (and (finite-real-p s) (> s 0) (<= s *max-size*))) size))
+    (btr-fail "~a: size ~s, expected (x y z) with positive reals of at most ~g m (BTR::*MAX-SIZE*)"
+              what size *max-size*))
   (mapcar (lambda (s) (coerce s 'double-float)) size))
 
 (defun positive-arg (x what)
-  (unless (and (realp x) (> x 0)) (btr-fail "~a is ~s, expected a positive real" what x))
+  (unless (and (finite-real-p x) (> x 0) (<= x *max-size*))
+    (btr-fail "~a is ~s, expected a positive real of at most ~g m (BTR::*MAX-SIZE*)" what x *max-size*))
   (coerce x 'double-float))
 
 (define-object-kind :static-plane (world pose (normal '(0 0 1)) (constant 0))

@@ -119,6 +119,13 @@ SUPPORT, the touched link, not the whole environment)."
 
 (defun restore-world-state (state &optional (world *current-bullet-world*))
   "Put the objects of WORLD back to STATE (from WORLD-STATE); objects added since stay."
+  (unless (typep world 'bt-reasoning-world)
+    (btr-fail "RESTORE-WORLD-STATE: world ~s, expected a Bullet world" world))
+  (unless (and (listp state)
+               (every (lambda (e) (and (consp e) (eql (length e) 4) (symbolp (first e)))) state))
+    (btr-fail "RESTORE-WORLD-STATE: state ~s, expected a list from WORLD-STATE of ~
+(name pose joint-states attachments) entries"
+              state))
   (dolist (entry state)
     (destructuring-bind (n p joints attached) entry
       (let ((o (object world n)))

@@ -185,7 +185,15 @@ table name → value. All joints are set at once, then links and attached object
 (defun attach-object (parent object &key link loose grasp)
   "Attach OBJECT (an object or name) to PARENT: a robot-object at LINK (a link name), or an item.
 Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only recorded."
-  (let* ((world (world (if (typep parent 'object) parent *current-bullet-world*)))
+  (unless (or (typep parent 'object) (and parent (symbolp parent)))
+    (btr-fail "ATTACH-OBJECT: parent ~s, expected an object of a Bullet world or an object's name"
+              parent))
+  (unless (or (typep object 'object) (and object (symbolp object)))
+    (btr-fail "ATTACH-OBJECT: object ~s, expected an object of a Bullet world or an object's name"
+              object))
+  (let* ((world (cond ((typep parent 'object) (world parent))
+                      ((typep object 'object) (world object))
+                      (t *current-bullet-world*)))
          (parent (ensure-object world parent))
          (object (ensure-object world object))
          (link-i (cond ((typep parent 'robot-object)

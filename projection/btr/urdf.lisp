@@ -72,8 +72,15 @@
       (dom:get-attribute element name)
       default))
 
-(defun numbers (string what &optional count)
-  "Parse the whitespace separated reals of STRING."
+(defparameter *max-coordinate* 1d6
+  "Largest magnitude (metres) of a coordinate in a URDF origin: larger ones are refused.")
+
+(defparameter *max-length* 1d4
+  "Largest magnitude (metres) of a URDF geometry's size, radius, length or scale.")
+
+(defun numbers (string what &optional count max)
+  "Parse the whitespace separated reals of STRING; with MAX, each must be at most MAX in
+magnitude. Errors name STRING as written in the URDF."
   (let ((values '()) (start 0) (len (length string)))
     (loop
       (let ((b (position-if-not (lambda (c) (member c '(#\Space #\Tab #\Newline #\Return))) string :start start)))
@@ -86,7 +93,9 @@
                                           (*read-eval* nil))
                                       (read-from-string token)))
                       (error () nil)))))
-          (unless (realp v) (urdf-fail "~a: ~s is not a number" what token))
+          (unless (realp v) (urdf-fail "~a: ~s is not a number (in ~s)" what token string))
+          (when (and max (> (abs v) max))
+            (urdf-fail "~a: ~s (in ~s) is beyond the bound ~g of its magnitude" what token string max))
           (push (coerce v 'double-float) values)
           (setf start e))))
     (setf values (nreverse values))
@@ -105,7 +114,7 @@
 
 (defun parse-origin (element what)
   (if element
-      (list (numbers (attr element "xyz" "0 0 0") (format nil "~a origin xyz" what) 3)
+      (list (numbers (attr element "xyz" "0 0 0") (format nil "~a origin xyz" what) 3 *max-coordinate*)
             (apply #'rpy->quaternion
                    (numbers (attr element "rpy" "0 0 0") (format nil "~a origin rpy" what) 3)))
       (list (list 0d0 0d0 0d0) (list 0d0 0d0 0d0 1d0))))
@@ -114,15 +123,15 @@
   (let ((g (and element (find-if #'dom:element-p (dom:child-nodes element)))))
     (unless g (urdf-fail "~a has no geometry" what))
     (let ((tag (dom:tag-name g)))
-      (cond ((string= tag "box") (list :box :size (numbers (attr g "size" "") (format nil "~a box size" what) 3)))
+      (cond ((string= tag "box") (list :box :size (numbers (attr g "size" "") (format nil "~a box size" what) 3 *max-length*)))
             ((string= tag "cylinder")
-             (list :cylinder :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1))
-                             :length (first (numbers (attr g "length" "") (format nil "~a length" what) 1))))
+             (list :cylinder :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1 *max-length*))
+                             :length (first (numbers (attr g "length" "") (format nil "~a length" what) 1 *max-length*))))
             ((string= tag "sphere")
-             (list :sphere :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1))))
+             (list :sphere :radius (first (numbers (attr g "radius" "") (format nil "~a radius" what) 1 *max-length*))))
             ((string= tag "mesh")
              (list :mesh :filename (or (attr g "filename") (urdf-fail "~a mesh without filename" what))
-                         :scale (if (attr g "scale") (numbers (attr g "scale") (format nil "~a scale" what) 3)
+                         :scale (if (attr g "scale") (numbers (attr g "scale") (format nil "~a scale" what) 3 *max-length*)
                                     (list 1d0 1d0 1d0))))
             (t (urdf-fail "~a has unknown geometry <~a>" what tag))))))
 
@@ -161,7 +170,13 @@
                  'joint :name name :type type :parent parent :child child
                  :origin (parse-origin (child-named element "origin") name)
                  :axis (if (child-named element "axis")
-                           (numbers (attr (child-named element "axis") "xyz" "1 0 0") (format nil "~a axis" name) 3)
+                           (let* ((text (attr (child-named element "axis") "xyz" "1 0 0"))
+                                  (axis (numbers text (format nil "~a axis" name) 3 *max-coordinate*)))
+                             (when (and (member type '(:revolute :continuous :prismatic))
+                                        (every #'zerop axis))
+                               (urdf-fail "joint ~s (~(~a~)): axis xyz ~s has zero length, ~
+expected a direction" name type text))
+                             axis)
                            (list 1d0 0d0 0d0))
                  :limits (and limit
                               (let ((lower (first (numbers (attr limit "lower" "0") name 1)))

@@ -124,7 +124,7 @@ whole or not at all. Returns TRANSFORMER."
 a snapshot labelled LABEL, *AFTER-MOTION-HOOKS*, and the ROBOT-STATE-CHANGED event."
   (when *tf-from-belief-state*
     (update-tf-from-belief-state))
-  (btr:snapshot label)
+  (cpl:note-picture (btr:snapshot label))
   (dolist (hook *after-motion-hooks*) (funcall hook label))
   (coe:on-event (make-instance 'cpoe:robot-state-changed)))
 

@@ -4,7 +4,7 @@
 
 (defpackage :cram-plans-compat
   (:use :cl :cram-prolog)
-  (:export #:modern-location-description #:known-location-keys #:unknown-location-key-error
+  (:export #:modern-location-description #:known-location-keys #:register-location-key
            #:old-surface-link #:*object-name-aliases*))
 
 ;;; cram_occupancy_grid_costmap: the occupancy map for navigation.

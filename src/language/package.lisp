@@ -31,7 +31,7 @@
    #:node-kind #:node-name #:node-designator #:node-children #:node-parent
    #:node-outcome #:node-failure #:node-caught-failures #:node-retries
    #:node-start-time #:node-end-time #:node-start-unix #:node-end-unix
-   #:node-duration #:find-task-tree-nodes
+   #:node-duration #:find-task-tree-nodes #:node-pictures #:note-picture
    ;; logging
    #:log-message #:log-debug #:log-info #:log-warn #:log-error
    #:*log-stream* #:*log-tags* #:*log-level* #:with-log-tags))

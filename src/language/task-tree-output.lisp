@@ -29,6 +29,7 @@
          "failure" (failure-json (node-failure node))
          "caught_failures" (map 'vector #'failure-json (node-caught-failures node))
          "retries" (node-retries node)
+         "pictures" (coerce (node-pictures node) 'vector)
          "children" (map 'vector (lambda (child) (node-json child root-start))
                          (node-children node)))
    :test #'equal))
@@ -78,26 +79,42 @@ details>summary{cursor:pointer;padding:2px 0}
 .succeeded{background:#2e7d32}.failed{background:#c62828}
 .evaporated{background:#757575}.running{background:#ef6c00}
 .row-failed>summary .name,.row-failed>.leaf .name{color:#c62828}
-.desig{font-family:monospace;font-size:.85em;color:#1a237e;margin-left:.6em}
+.desig{font-size:.85em;color:#1a237e;margin:2px 0 2px 1.2em}.desig pre{margin:2px 0;white-space:pre-wrap}
+.pic{font-size:.85em;margin-left:.5em}
 .info{font-size:.85em;margin:2px 0 2px 1.2em;color:#444}
 .fail{color:#b71c1c}.caught{color:#8d6e63}.retries{color:#6a1b9a}")
 
-(defun write-node-html (node root-start stream)
+(defun human-time (unix)
+  "UNIX seconds as `2026-11-24 10:31:05.123 UTC'."
+  (multiple-value-bind (seconds fraction) (floor unix)
+    (multiple-value-bind (s mi h d mo y) (decode-universal-time (+ seconds (encode-universal-time 0 0 0 1 1 1970 0)) 0)
+      (format nil "~d-~2,'0d-~2,'0d ~2,'0d:~2,'0d:~2,'0d.~3,'0d UTC" y mo d h mi s
+              (min 999 (floor (* fraction 1000)))))))
+
+(defun picture-link (path base)
+  "PATH relative to the directory BASE when it lies below it, else PATH itself."
+  (let ((dir (and base (namestring (uiop:pathname-directory-pathname base)))))
+    (if (and dir (uiop:string-prefix-p dir path)) (subseq path (length dir)) path)))
+
+(defun write-node-html (node root-start stream &optional base)
   (let* ((children (node-children node))
          (outcome (string-downcase (symbol-name (node-outcome node))))
          (header
            (format nil "<span class=\"kind\">~a</span><span class=\"name\">~a</span>~
                         <span class=\"outcome ~a\">~a</span>~
-                        <span class=\"dur\">~a (at +~a)</span>~@[<span class=\"desig\">~a</span>~]"
+                        <span class=\"dur\">~a (at +~a)</span>~{ <a class=\"pic\" href=\"~a\">picture</a>~}"
                    (html-escape (string-downcase (symbol-name (node-kind node))))
                    (html-escape (name-string (node-name node)))
                    outcome outcome
                    (format-duration (node-duration node))
                    (format-duration (/ (- (node-start-time node) root-start)
                                        1d6))
-                   (and (node-designator node) (html-escape (node-designator node)))))
+                   (mapcar (lambda (p) (html-escape (picture-link p base))) (node-pictures node))))
          (details
            (with-output-to-string (out)
+             (when (node-designator node)
+               (format out "<details class=\"desig\"><summary>designator</summary><pre>~a</pre></details>"
+                       (html-escape (node-designator node))))
              (when (node-failure node)
                (format out "<div class=\"info fail\">failure ~a: ~a</div>"
                        (html-escape (string (getf (node-failure node) :class)))
@@ -115,7 +132,7 @@ details>summary{cursor:pointer;padding:2px 0}
           (format stream "<details open><summary>~a</summary>~a<ul class=\"tree\">"
                   header details)
           (dolist (child children)
-            (write-node-html child root-start stream))
+            (write-node-html child root-start stream base))
           (format stream "</ul></details>"))
         (format stream "<div class=\"leaf\">~a</div>~a" header details))
     (format stream "</li>~%")))
@@ -123,8 +140,10 @@ details>summary{cursor:pointer;padding:2px 0}
 (defun write-task-tree-html (path &optional (root *last-task-tree*))
   "Write the task tree under ROOT (default: the last top-level run) to PATH as
 a self-contained HTML page: a collapsible indented tree with each node's kind,
-name, outcome (coloured), duration, designator, failure, caught failures and
-retries. Returns the pathname written."
+name, outcome (coloured), duration, a link to each picture taken while it ran
+(NOTE-PICTURE; relative to PATH's directory when below it), its designator
+(collapsed), failure, caught failures and retries; times in UTC. Returns the
+pathname written."
   (check-node root 'write-task-tree-html)
   (unless (or (stringp path) (pathnamep path))
     (error "WRITE-TASK-TREE-HTML: expected a path, got ~s." path))
@@ -138,17 +157,17 @@ retries. Returns the pathname written."
                       <title>Task tree: ~a</title><style>~a</style></head><body>~%"
               (html-escape (name-string (node-name root))) +task-tree-css+)
       (format stream "<h1>Task tree of ~a</h1>~%<p class=\"summary\">~
-                      <span>started ~a (unix)</span><span>duration ~a</span>~
+                      <span>started ~a</span><span>duration ~a</span>~
                       <span>~d nodes</span><span>~d succeeded</span><span>~d failed</span>~
                       <span>~d evaporated</span><span>~d retries</span></p>~%"
               (html-escape (name-string (node-name root)))
-              (format-unix-time (node-start-unix root))
+              (human-time (node-start-unix root))
               (format-duration (node-duration root))
               (length nodes)
               (funcall count :succeeded) (funcall count :failed)
               (funcall count :evaporated)
               (reduce #'+ nodes :key #'node-retries))
       (format stream "<ul class=\"tree\">~%")
-      (write-node-html root root-start stream)
+      (write-node-html root root-start stream path)
       (format stream "</ul>~%</body></html>~%"))
     (pathname path)))

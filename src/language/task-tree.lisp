@@ -20,6 +20,7 @@
   (failure nil)
   (%caught-failures '())
   (retries 0 :type integer)
+  (%pictures '())
   (lock (bt:make-lock "task tree node")))
 
 (setf (documentation 'node-kind 'function)
@@ -83,6 +84,17 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
       (bt:with-lock-held ((node-lock parent))
         (push node (node-%children parent))))
     node))
+
+(defun node-pictures (node)
+  "The pictures (path strings, oldest first) taken while NODE ran, noted with NOTE-PICTURE."
+  (bt:with-lock-held ((node-lock node)) (reverse (node-%pictures node))))
+
+(defun note-picture (path &optional (node *task-tree-node*))
+  "Note that the picture at PATH shows the world as NODE (default: the current task tree node)
+left it; the task tree page links it. Outside a plan this does nothing. Returns PATH."
+  (when (and node path)
+    (bt:with-lock-held ((node-lock node)) (push (namestring path) (node-%pictures node))))
+  path)
 
 (defun note-retry (node)
   "Count one retry in NODE."

@@ -12,7 +12,7 @@
    #:define-object-type #:known-object-types
    ;; grasps
    #:def-object-type-to-gripper-transforms #:grasp-spec #:get-action-grasps
-   #:object-type-grasps #:get-object-type-to-gripper-transform
+   #:object-type-grasps #:get-object-type-grasps #:get-object-type-to-gripper-transform
    #:get-object-type-to-gripper-pregrasp-transforms
    #:get-object-type-to-gripper-lift-offsets
    #:get-object-type-gripping-effort #:get-object-type-gripper-opening
@@ -171,6 +171,18 @@ lifting raises twice by LIFT metres."
   (loop for spec in (type-grasp-specs object-type)
         when (or (null arm) (eq (grasp-spec-arms spec) :all) (member arm (grasp-spec-arms spec)))
           collect (grasp-spec-grasp spec)))
+
+(defun get-object-type-grasps (object-type facing-robot-face bottom-face rotationally-symmetric-p arm)
+  "CRAM's call for the grasps OBJECT-TYPE offers ARM, in preference order (as
+OBJECT-TYPE-GRASPS). CRAM narrows the choice by the object's face towards the robot, its bottom
+face and its rotational symmetry; object faces are not modelled here, so those three must be
+NIL (as the tutorials pass them)."
+  (when (or facing-robot-face bottom-face rotationally-symmetric-p)
+    (knowledge-error "GET-OBJECT-TYPE-GRASPS: object faces are not modelled; pass NIL for the ~
+facing-robot face (~s), the bottom face (~s) and the symmetry flag (~s), or use GET-ACTION-GRASPS ~
+with the object's transform in the robot base."
+                     facing-robot-face bottom-face rotationally-symmetric-p))
+  (object-type-grasps object-type arm))
 
 (defun find-grasp-spec (object-type grasp)
   (check-type-keyword object-type 'find-grasp-spec)

@@ -62,7 +62,7 @@
       (sb-posix:setenv "ROS_IP" "127.0.0.1" 1))
     (roslisp:start-ros-node name :master-uri uri :anonymous anonymous :cmd-line-args nil)
     (reset-publications)
-    (call-registered (select-init-functions *ros-init-functions* #'roslisp-read-parameter
+    (call-registered (select-init-functions (ros-init-functions) #'roslisp-read-parameter
                                             :world world)
                      "ROS init")
     (when publish-rate
@@ -73,7 +73,7 @@
   "SHUTDOWN-ROS with roslisp loaded."
   (%stop-belief-state-publisher)
   (when (ros-running-p)
-    (dolist (name *ros-cleanup-functions*)
+    (dolist (name (ros-cleanup-functions))
       (handler-case (if (fboundp name)
                         (funcall name)
                         (ros-fail "ROS cleanup function ~s is registered but not defined" name))

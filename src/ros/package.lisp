@@ -18,7 +18,7 @@
    #:ros-init-functions #:ros-cleanup-functions
    ;; which world startup-ros builds
    #:register-ros-world #:ros-worlds #:select-init-functions #:ros-world-error
-   #:*ros-init-functions* #:*ros-cleanup-functions*
+   #:*ros-init-functions* #:*ros-cleanup-functions* #:make-function-registry
    ;; URDFs from the parameter server
    #:robot-description-string #:description-parameter-missing
    ;; names

@@ -8,56 +8,110 @@
   "How often (Hz) STARTUP-ROS's background thread publishes the belief state; NIL: never (call
 PUBLISH-BELIEF-STATE yourself).")
 
-(defvar *ros-init-functions* '()
-  "Names (symbols) of the functions STARTUP-ROS calls, in registration order. Bind it to run
-STARTUP-ROS with a different set.")
+;;; Both registries are hash tables keyed by function name, as in CRAM (so
+;;; (alexandria:hash-table-keys roslisp-utilities:*ros-init-functions*) lists the names); the value
+;;; of a name is the name itself, which FUNCALL calls through its current definition. The order
+;;; STARTUP-ROS / SHUTDOWN-ROS call them in is the registration order, kept beside each table (in
+;;; *REGISTRATION-ORDERS*), so binding the variable to a fresh table gives a fresh order too.
+;;; For compatibility with code written against the earlier registry, a variable bound to a list
+;;; of names is still accepted: that list is the set and the order.
 
-(defvar *ros-cleanup-functions* '()
-  "Names (symbols) of the functions SHUTDOWN-ROS calls, in registration order.")
+(defvar *registration-orders* (make-hash-table :test 'eq :weakness :key)
+  "Registration order (a list of names) of each registry hash table.")
+
+(defun make-function-registry (&rest names)
+  "A fresh registry (hash table) holding NAMES, registered in that order."
+  (let ((table (make-hash-table :test 'eq)))
+    (dolist (name names table) (registry-add name table))))
+
+(defvar *ros-init-functions* (make-function-registry)
+  "The functions STARTUP-ROS calls: a hash table from function name (a symbol) to that name,
+called in registration order. Bind it (e.g. to (MAKE-FUNCTION-REGISTRY 'A 'B), or to a list of
+names in calling order) to run STARTUP-ROS with a different set.")
+
+(defvar *ros-cleanup-functions* (make-function-registry)
+  "The functions SHUTDOWN-ROS calls: a hash table from function name to that name, called in
+registration order.")
 
 (defun check-function-name (name what)
   (unless (and name (symbolp name))
     (ros-fail "~a: ~s, expected the name (a non-NIL symbol) of a function of no arguments" what name))
   name)
 
-(defun add-function-name (name list)
-  "LIST with NAME appended, unless NAME is already in it (then LIST keeps its order)."
-  (if (member name list) list (append list (list name))))
+(defun check-registry (registry what)
+  (unless (or (hash-table-p registry) (listp registry))
+    (ros-fail "~a is ~s, expected a hash table from function names to functions (or a list of names)"
+              what registry))
+  registry)
+
+(defun registry-names (registry)
+  "The names in REGISTRY in calling (registration) order: for a hash table its recorded order,
+followed by any key put in by hand (SETF GETHASH), in the table's own order; a list is its own order."
+  (if (listp registry)
+      (remove-duplicates registry :from-end t)
+      (let* ((order (remove-if-not (lambda (n) (nth-value 1 (gethash n registry)))
+                                   (gethash registry *registration-orders*)))
+             (extra '()))
+        (maphash (lambda (k v) (declare (ignore v)) (unless (member k order) (push k extra))) registry)
+        (append order (nreverse extra)))))
+
+(defun registry-add (name registry)
+  "REGISTRY with NAME registered (a name registered again keeps its place)."
+  (cond ((listp registry) (if (member name registry) registry (append registry (list name))))
+        (t (unless (nth-value 1 (gethash name registry))
+             (setf (gethash registry *registration-orders*)
+                   (append (remove name (gethash registry *registration-orders*)) (list name))))
+           (setf (gethash name registry) name)
+           registry)))
+
+(defun registry-remove (name registry)
+  "(values REGISTRY-without-NAME was-registered-p)."
+  (if (listp registry)
+      (values (remove name registry) (and (member name registry) t))
+      (let ((present (nth-value 1 (gethash name registry))))
+        (remhash name registry)
+        (setf (gethash registry *registration-orders*)
+              (remove name (gethash registry *registration-orders*)))
+        (values registry present))))
 
 (defmacro register-ros-init-function (name)
   "Register the function named NAME (an unquoted symbol) to be called, with no arguments, by
 STARTUP-ROS after the node has started. Functions run in registration order; registering a name
 again keeps its place. The function is called through its name, so redefinitions take effect."
   `(setf *ros-init-functions*
-         (add-function-name (check-function-name ',name 'register-ros-init-function)
-                            *ros-init-functions*)))
+         (registry-add (check-function-name ',name 'register-ros-init-function)
+                       (check-registry *ros-init-functions* '*ros-init-functions*))))
 
 (defmacro register-ros-cleanup-function (name)
   "Register the function named NAME (an unquoted symbol) to be called, with no arguments, by
 SHUTDOWN-ROS before the node stops. Functions run in registration order."
   `(setf *ros-cleanup-functions*
-         (add-function-name (check-function-name ',name 'register-ros-cleanup-function)
-                            *ros-cleanup-functions*)))
+         (registry-add (check-function-name ',name 'register-ros-cleanup-function)
+                       (check-registry *ros-cleanup-functions* '*ros-cleanup-functions*))))
 
 (defun unregister-ros-init-function (name)
   "Remove NAME from the init functions; true when it was registered."
   (check-function-name name 'unregister-ros-init-function)
-  (prog1 (and (member name *ros-init-functions*) t)
-    (setf *ros-init-functions* (remove name *ros-init-functions*))))
+  (multiple-value-bind (registry present)
+      (registry-remove name (check-registry *ros-init-functions* '*ros-init-functions*))
+    (setf *ros-init-functions* registry)
+    present))
 
 (defun unregister-ros-cleanup-function (name)
   "Remove NAME from the cleanup functions; true when it was registered."
   (check-function-name name 'unregister-ros-cleanup-function)
-  (prog1 (and (member name *ros-cleanup-functions*) t)
-    (setf *ros-cleanup-functions* (remove name *ros-cleanup-functions*))))
+  (multiple-value-bind (registry present)
+      (registry-remove name (check-registry *ros-cleanup-functions* '*ros-cleanup-functions*))
+    (setf *ros-cleanup-functions* registry)
+    present))
 
 (defun ros-init-functions ()
-  "The names of the registered init functions, in the order STARTUP-ROS calls them."
-  (copy-list *ros-init-functions*))
+  "The names of the registered init functions, in the order STARTUP-ROS calls them (a fresh list)."
+  (copy-list (registry-names (check-registry *ros-init-functions* '*ros-init-functions*))))
 
 (defun ros-cleanup-functions ()
-  "The names of the registered cleanup functions, in the order SHUTDOWN-ROS calls them."
-  (copy-list *ros-cleanup-functions*))
+  "The names of the registered cleanup functions, in the order SHUTDOWN-ROS calls them (a fresh list)."
+  (copy-list (registry-names (check-registry *ros-cleanup-functions* '*ros-cleanup-functions*))))
 
 ;;; ---- hooks the roslisp part installs ---------------------------------------------------------------
 

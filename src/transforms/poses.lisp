@@ -201,17 +201,25 @@ A, so (transform* map->base base->hand) is map->hand."
   "The 3D-VECTOR POINT mapped by TRANSFORM: rotation(point) + translation."
   (unless (transform-p transform) (input-error transform "a TRANSFORM" 'transform-point))
   (unless (3d-vector-p point) (input-error point "a 3D-VECTOR" 'transform-point))
-  (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
-    (with-transform-components ((tx ty tz qx qy qz qw) transform)
-      (with-vector-components ((vx vy vz) point)
-        (multiple-value-bind (rx ry rz) (%rotate-components qx qy qz qw vx vy vz)
-          (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz)))))))
+  (handler-case
+      (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
+        (with-transform-components ((tx ty tz qx qy qz qw) transform)
+          (with-vector-components ((vx vy vz) point)
+            (multiple-value-bind (rx ry rz) (%rotate-components qx qy qz qw vx vy vz)
+              (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz))))))
+    (floating-point-overflow ()
+      (input-error (list transform point) "a transform and a point whose result is within double-float range" 'transform-point))))
 
 (defun transform-pose (transform pose)
   "The POSE that results from moving POSE by TRANSFORM (POSE expressed in TRANSFORM's parent
 frame when TRANSFORM is the child frame's transform)."
   (unless (transform-p transform) (input-error transform "a TRANSFORM" 'transform-pose))
   (unless (pose-p pose) (input-error pose "a POSE" 'transform-pose))
+  (handler-case (%transform-pose transform pose)
+    (floating-point-overflow ()
+      (input-error (list transform pose) "a transform and a pose whose result is within double-float range" 'transform-pose))))
+
+(defun %transform-pose (transform pose)
   (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
     (with-transform-components ((tx ty tz ax ay az aw) transform)
       (with-vector-components ((vx vy vz) (origin pose))

@@ -378,6 +378,9 @@ aborts the replay with that condition, as it would abort the user's paste."
                                (lambda (c)
                                  (format t "~&;; FAILED seed ~a ~a: ~a~%" (seed-number *seed*) label
                                          (handler-case (princ-to-string c) (error () (type-of c))))
+                                 ;; SEED_BACKTRACE=1 in the environment: where it failed, too
+                                 (when (uiop:getenv "SEED_BACKTRACE")
+                                   (sb-debug:print-backtrace :count 40))
                                  (push (cons label c) (seed-failures *seed*))
                                  (return-from try nil))))
                 (funcall thunk)

@@ -12,7 +12,40 @@
 
 (in-package :seeds)
 
-(define-seed "001" :format :table :side :old)
+;;; Two stretches of the page are HTML comments (`<!-- ... -->', written `<html><!--' in DokuWiki,
+;;; which the diff table cut to `<'): the installation notes and the last section (`Light-weight
+;;; simulation'), whose two Lisp blocks readers never see. Those blocks are not blocks of the page:
+;;; they are left out of N before numbering (they come last, so the others keep their numbers).
+
+(defun comment-open-p (text)
+  "Whether TEXT may open a comment: `<!--', or `<html><!--' cut short by the diff table to a
+prefix of it alone on its line (such as `<', which could also be another tag cut short)."
+  (let ((s (trim text)))
+    (and (plusp (length s))
+         (or (search "<!--" s)
+             (and (<= (length s) 10) (string= s "<html><!--" :end2 (length s)))))))
+
+(defun comment-close-p (text) (search "-->" text))
+
+(defun html-comments (lines)
+  "The commented stretches of LINES as (open-line . close-line): a possible opening counts only
+when a `-->' follows it before the next possible opening (a lone `<' is also what the diff
+table leaves of other tags, e.g. `<note>')."
+  (let ((opens (remove-if-not (lambda (e) (comment-open-p (cdr e))) lines)))
+    (loop for (o . rest) on opens
+          for next = (if rest (car (first rest)) most-positive-fixnum)
+          for close = (find-if (lambda (e) (and (> (car e) (car o)) (< (car e) next)
+                                                (comment-close-p (cdr e))))
+                               lines)
+          when close collect (cons (car o) (car close)))))
+
+(defun html-commented-p (block lines)
+  "Whether BLOCK (entries of LINES) lies inside one of the page's HTML comments."
+  (let ((first-line (car (first block))))
+    (some (lambda (c) (< (car c) first-line (cdr c))) (html-comments lines))))
+
+(define-seed "001" :format :table :side :old
+  :blocks (remove-if (lambda (b) (html-commented-p b lines)) (code-blocks lines)))
 
 ;;; ------------------------------------------------------------------------------------------
 ;;; A private ROS master with launch/world.launch, as the page's `roslaunch ... world.launch'.
@@ -98,7 +131,16 @@
 (defun robot-urdf-text () (uiop:read-file-string (merge-pathnames "robots/pr2/pr2.urdf" *checkout*)))
 (defun held-by (arm)
   "The names of the objects attached to the robot's ARM gripper."
-  (mapcar (lambda (o) (intern (symbol-name (btr:name o)) :seeds)) (btr:attached-objects (robot-object) arm)))
+  (let* ((robot (robot-object))
+         (links (mapcar (lambda (a) (binding "?LINK" a))
+                        (cut:force-ll
+                         (prolog:prolog `(or (rob-int:gripper-link ,(btr:name robot) ,arm ?link)
+                                             (rob-int:end-effector-link ,(btr:name robot) ,arm ?link)))))))
+    ;; BTR:ATTACHED-OBJECTS gives (object-name link-name loose grasp) entries
+    (remove-duplicates
+     (loop for (name link) in (btr:attached-objects robot)
+           when (member link links :test #'equal)
+             collect (intern (symbol-name name) :seeds)))))
 (defun on-island-p (name)
   "NAME rests on the kitchen island top: inside its footprint, its bottom on the top (z 0.84)."
   (destructuring-bind (x y z) (xyz (btr:pose (obj name)))
@@ -543,32 +585,15 @@
   (expect (near (subseq (xyz (btr:pose (obj 'bottle-2))) 0 2) '(-2 -0.9) 0.05) "bottle-2 is at ~s" (xyz (btr:pose (obj 'bottle-2))))
   (expect (and (stable-p 'bottle-1) (stable-p 'bottle-2)) "the bottles are not stable"))
 
-;;; The page's last section is commented out (<!-- ... -->): readers never see blocks 47 and 48.
+;;; The page's last section (`Light-weight simulation': find the red mug in projection, the
+;;; pancake demo) is inside `<html><!-- ... -->': readers never see it, and DEFINE-SEED above
+;;; leaves its two blocks out of N. Check that the detector left out exactly those.
 
-(defun inside-html-comment-p (index)
-  (let* ((first-line (car (first (nth (1- index) (seed-blocks *seed*)))))
-         (lines (seed-lines *seed*))
-         (open (car (find-if (lambda (e) (and (< (car e) first-line) (search "< |" (cdr e)))) lines :from-end t)))
-         (close (car (find-if (lambda (e) (and (> (car e) first-line) (search "-->" (cdr e)))) lines))))
-    (and open close)))
-
-(equivalent-block 47 (:name "find the red mug in projection" :reason "commented out of the page (<!-- -->)")
-  (expect (inside-html-comment-p 47) "block 47 is not inside the page's comment")
-  ;; what it did, in the vocabulary of the page's era: a mug on the island, found in projection
-  (funcall (btw "INIT-PROJECTION"))
-  (btr-utils:spawn-object 'mug-2 :mug :pose '((-1.0 1.2 0.9) (0 0 0 1)))
-  (btr:simulate (world) 1)
-  (let* ((on-counter (desig:make-designator :location '((:on "CounterTop") (:name "iai_kitchen_kitchen_island_counter_top"))))
-         (a-mug (desig:make-designator :object `((:type :mug) (:at ,on-counter))))
-         (found (proj:with-projection-environment pr2-proj::pr2-bullet-projection-environment
-                  (cpl:top-level
-                    (let ((?see (desig:reference (desig:make-designator :location `((:to :see) (:object ,a-mug))))))
-                      (exe:perform (desig:a motion (type going) (target (desig:a location (pose ?see)))))
-                      (let ((?obj (desig:an object (type mug))))
-                        (pr2-pp-plans::perceive ?obj)))))))
-    (expect found "the mug was not found")))
-
-(equivalent-block 48 (:name "the pancake demo" :reason "commented out of the page (<!-- -->)")
-  (expect (inside-html-comment-p 48) "block 48 is not inside the page's comment"))
+(let* ((all (code-blocks (seed-lines *seed*)))
+       (hidden (remove-if-not (lambda (b) (html-commented-p b (seed-lines *seed*))) all)))
+  (unless (and (= 2 (length hidden))
+               (search "with-projection-environment" (format nil "~{~a~}" (mapcar #'cdr (first hidden))))
+               (search "execute-demo" (format nil "~{~a~}" (mapcar #'cdr (second hidden)))))
+    (error "seed 001: the commented-out blocks are not the red-mug and pancake-demo blocks: ~s" hidden)))
 
 (finish-seed)

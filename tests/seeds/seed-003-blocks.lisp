@@ -54,7 +54,7 @@ when TOP) and compile: the file is written and compiled (loaded), then CHECKS ru
   (expect (and (search "pepper_wrt_map_tf" (launch-text)) (search "shelf_wrt_map_tf" (launch-text)))
           "pepper.launch lacks the map transforms"))
 (equivalent-block 9 (:name "roslaunch upload.launch" :reason "shell: roslaunch launch/pepper.launch")
-  (start-private-ros)
+  (start-private-ros "launch/pepper.launch")
   (let ((params (ros-run "rosparam" "list")))
     (expect (and (search "/robot_description" params) (search "/shelf_description" params))
             "the parameters are not uploaded: ~a" params)))

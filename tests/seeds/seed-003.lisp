@@ -49,63 +49,6 @@ pairs; a REPL step and the output the page shows for it leave out the prose betw
   (format nil "~{~a~^~%~}" (mapcar #'cdr (lines-block (seed-lines *seed*) from to))))
 
 ;;; ------------------------------------------------------------------------------------------
-;;; A private ROS master with launch/pepper.launch, as `roslaunch pepper_description upload.launch'.
-
-(defvar *ros-dir* nil)
-(defvar *ros-processes* '())
-
-(defun free-port ()
-  (let ((s (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
-    (unwind-protect
-         (progn (sb-bsd-sockets:socket-bind s #(127 0 0 1) 0)
-                (nth-value 1 (sb-bsd-sockets:socket-name s)))
-      (sb-bsd-sockets:socket-close s))))
-
-(defun ros-run (program &rest args)
-  (uiop:run-program (cons program args) :output :string :ignore-error-status t :error-output :output))
-
-(defun stop-private-ros ()
-  (ignore-errors (roslisp-utilities:shutdown-ros))
-  (dolist (p *ros-processes*)
-    (when (sb-ext:process-alive-p p)
-      (ignore-errors (sb-posix:kill (- (sb-ext:process-pid p)) sb-posix:sigint))))
-  (loop repeat 80 while (some #'sb-ext:process-alive-p *ros-processes*) do (sleep 0.1))
-  (dolist (p *ros-processes*)
-    (when (sb-ext:process-alive-p p)
-      (ignore-errors (sb-posix:kill (- (sb-ext:process-pid p)) sb-posix:sigkill))))
-  (setf *ros-processes* '())
-  (when *ros-dir*
-    (uiop:delete-directory-tree (uiop:ensure-directory-pathname *ros-dir*) :validate t
-                                                                           :if-does-not-exist :ignore)
-    (setf *ros-dir* nil)))
-
-(defun start-private-ros ()
-  "`roslaunch launch/pepper.launch' with its own master on a free port, ROS_HOME under /tmp."
-  (let* ((port (free-port))
-         (dir (format nil "/tmp/cram-seed-003-ros-~d/" (sb-posix:getpid))))
-    (setf *ros-dir* dir)
-    (ensure-directories-exist (format nil "~alog/" dir))
-    (sb-posix:setenv "ROS_MASTER_URI" (format nil "http://127.0.0.1:~d" port) 1)
-    (sb-posix:setenv "ROS_HOME" dir 1)
-    (sb-posix:setenv "ROS_LOG_DIR" (format nil "~alog" dir) 1)
-    (sb-posix:setenv "ROS_IP" "127.0.0.1" 1)
-    (sb-posix:unsetenv "ROS_HOSTNAME")
-    (push #'stop-private-ros sb-ext:*exit-hooks*)
-    (let ((p (sb-ext:run-program "roslaunch"
-                                 (list "-p" (princ-to-string port)
-                                       (namestring (merge-pathnames "launch/pepper.launch" *checkout*)))
-                                 :search t :wait nil :input nil
-                                 :output (format nil "~aroslaunch.log" dir)
-                                 :if-output-exists :supersede :error :output
-                                 :environment (sb-ext:posix-environ))))
-      (ignore-errors (sb-posix:setpgid (sb-ext:process-pid p) (sb-ext:process-pid p)))
-      (push p *ros-processes*))
-    (expect (loop repeat 200 thereis (search "/map_server" (ros-run "rosnode" "list"))
-                  do (sleep 0.2))
-            "roslaunch launch/pepper.launch did not bring up /map_server; log:~%~a"
-            (ignore-errors (uiop:read-file-string (format nil "~aroslaunch.log" dir))))))
-
-;;; ------------------------------------------------------------------------------------------
 ;;; The user's workspace: ~/workspace/ros/src/cram/cram_pepper/{cram_pepper_description,cram_pepper_demo}
 
 (defvar *ws* (format nil "/tmp/cram-seed-003-ws-~d/" (sb-posix:getpid)))
