@@ -104,3 +104,44 @@
                    (second (first (rob-int:get-robot-joint-states :pr2 :arm :left :park)))))
            1d-6)))
   (is (member :looking-at (pp-plans:action-types))))
+
+(defun compat-init-x () :x)
+(defun compat-init-y () :y)
+
+(test compat-ros-init-functions-hash-table
+  "*ros-init-functions* is a hash table keyed by function name, as in CRAM; startup order is kept."
+  (is (hash-table-p roslisp-utilities:*ros-init-functions*))
+  (is (member 'cram-tf:init-tf (alexandria:hash-table-keys roslisp-utilities:*ros-init-functions*)))
+  (let ((roslisp-utilities:*ros-init-functions* (roslisp-utilities:make-function-registry)))
+    (roslisp-utilities:register-ros-init-function compat-init-y)
+    (roslisp-utilities:register-ros-init-function compat-init-x)
+    (roslisp-utilities:register-ros-init-function compat-init-y)
+    (is (equal '(compat-init-y compat-init-x) (roslisp-utilities:ros-init-functions)))
+    (is (= 2 (hash-table-count roslisp-utilities:*ros-init-functions*)))
+    (is (eq :x (funcall (gethash 'compat-init-x roslisp-utilities:*ros-init-functions*))))
+    (is-true (roslisp-utilities:unregister-ros-init-function 'compat-init-y))
+    (is (equal '(compat-init-x) (roslisp-utilities:ros-init-functions)))
+    ;; a name put in by hand, as CRAM code may do, runs after the registered ones
+    (setf (gethash 'compat-init-y roslisp-utilities:*ros-init-functions*) #'compat-init-y)
+    (is (equal '(compat-init-x compat-init-y) (roslisp-utilities:ros-init-functions))))
+  (is-false (member 'compat-init-x (roslisp-utilities:ros-init-functions))))
+
+(defun compat-test-far-away-generator (designator)
+  (let ((p (desig:desig-prop-value designator :compat-test-far-away)))
+    (if p (list (cl-transforms:make-pose (cl-transforms:make-3d-vector p 0 0)
+                                         (cl-transforms:make-identity-rotation)))
+        '())))
+
+(test compat-user-location-keys-are-not-unknown
+  "A key only a user's generator (registered after the compat layer) handles resolves; a key
+nobody handles is named in the error."
+  (unwind-protect
+       (progn
+         (desig:register-location-generator 50 compat-test-far-away-generator)
+         (let ((p (desig:reference (desig:make-designator :location '((:compat-test-far-away 7))))))
+           (is (= 7 (cl-transforms:x (cl-transforms:origin p))))))
+    (desig:delete-location-generator-function 'compat-test-far-away-generator))
+  (let ((e (handler-case (desig:reference (desig:make-designator :location '((:compat-test-far-away 7))))
+             (error (e) e))))
+    (is (typep e 'desig:location-resolution-error))
+    (is (search ":COMPAT-TEST-FAR-AWAY" (princ-to-string e)))))

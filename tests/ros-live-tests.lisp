@@ -144,6 +144,8 @@ Returns the live processes left behind (NIL when the cleanup was complete)."
                   (funcall thunk))
         (ignore-errors (roslisp-utilities:shutdown-ros))
         (mapc #'stop-process (private-ros-processes *ros*))))
+    ;; a node killed with its group may take a moment to go under load
+    (wait-until 10 (lambda () (null (processes-under dir))) 0.2)
     (let ((left (processes-under dir)))
       (dolist (pid left) (ignore-errors (sb-posix:kill pid sb-posix:sigkill)))
       (uiop:delete-directory-tree dir :validate t :if-does-not-exist :ignore)

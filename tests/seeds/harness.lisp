@@ -50,10 +50,15 @@
           ((and (>= (length l) 4) (string= "- | " l :end2 4))
            (let* ((rest (subseq l 4))
                   (sep (search " | + | " rest)))
+             (cond
+               ;; `- | + ||': on the old side a removed blank line, not a line `+'
+               ((and (eq side :old) (>= (length rest) 3) (string= "+ |" rest :end2 3))
+                "")
+               (t
              (if sep
                  (if (eq side :old) (subseq rest 0 sep)
                      (strip-suffix (strip-suffix (subseq rest (+ sep 7)) " |") "|"))
-                 (if (eq side :old) (strip-suffix (strip-suffix rest " | ||") " |") ""))))
+                 (if (eq side :old) (strip-suffix (strip-suffix rest " | ||") " |") ""))))))
           ((and (>= (length l) 4) (string= "+ | " l :end2 4))
            (if (eq side :new) (strip-suffix (strip-suffix (subseq l 4) " | ||") " |") ""))
           (t
