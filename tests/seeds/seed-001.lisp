@@ -48,67 +48,6 @@ table leaves of other tags, e.g. `<note>')."
   :blocks (remove-if (lambda (b) (html-commented-p b lines)) (code-blocks lines)))
 
 ;;; ------------------------------------------------------------------------------------------
-;;; A private ROS master with launch/world.launch, as the page's `roslaunch ... world.launch'.
-
-(defvar *ros-dir* nil)
-(defvar *ros-processes* '())
-
-(defun free-port ()
-  (let ((s (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
-    (unwind-protect
-         (progn (sb-bsd-sockets:socket-bind s #(127 0 0 1) 0)
-                (nth-value 1 (sb-bsd-sockets:socket-name s)))
-      (sb-bsd-sockets:socket-close s))))
-
-(defun ros-run (program &rest args)
-  "Run PROGRAM with ARGS against the private master; its output as a string."
-  (uiop:run-program (cons program args) :output :string :ignore-error-status t
-                                        :error-output :output))
-
-(defun stop-private-ros ()
-  (dolist (p *ros-processes*)
-    (when (sb-ext:process-alive-p p)
-      (ignore-errors (sb-posix:kill (- (sb-ext:process-pid p)) sb-posix:sigint))))
-  (loop repeat 50 while (some #'sb-ext:process-alive-p *ros-processes*) do (sleep 0.1))
-  (dolist (p *ros-processes*)
-    (when (sb-ext:process-alive-p p)
-      (ignore-errors (sb-posix:kill (- (sb-ext:process-pid p)) sb-posix:sigkill))))
-  (setf *ros-processes* '())
-  (when *ros-dir*
-    (uiop:delete-directory-tree (uiop:ensure-directory-pathname *ros-dir*) :validate t
-                                                                           :if-does-not-exist :ignore)))
-
-(defun start-private-ros ()
-  "roscore on a free port and `roslaunch launch/world.launch', with ROS_HOME under /tmp."
-  (let* ((port (free-port))
-         (dir (format nil "/tmp/cram-seed-001-~d/" (sb-posix:getpid))))
-    (setf *ros-dir* dir)
-    (ensure-directories-exist (format nil "~alog/" dir))
-    (sb-posix:setenv "ROS_MASTER_URI" (format nil "http://127.0.0.1:~d" port) 1)
-    (sb-posix:setenv "ROS_HOME" dir 1)
-    (sb-posix:setenv "ROS_LOG_DIR" (format nil "~alog" dir) 1)
-    (sb-posix:setenv "ROS_IP" "127.0.0.1" 1)
-    (sb-posix:unsetenv "ROS_HOSTNAME")
-    (push #'stop-private-ros sb-ext:*exit-hooks*)
-    (flet ((start (log program &rest args)
-             (let ((p (sb-ext:run-program program args :search t :wait nil :input nil
-                                                       :output (format nil "~a~a.log" dir log)
-                                                       :if-output-exists :supersede :error :output
-                                                       :environment (sb-ext:posix-environ))))
-               ;; its own process group, so that stopping it stops its children too
-               (ignore-errors (sb-posix:setpgid (sb-ext:process-pid p) (sb-ext:process-pid p)))
-               (push p *ros-processes*)
-               p)))
-      (start "roscore" "roscore" "-p" (princ-to-string port))
-      (expect (loop repeat 150 thereis (search "/rosdistro" (ros-run "rosparam" "list"))
-                    do (sleep 0.2))
-              "roscore did not answer on port ~d" port)
-      (start "world" "roslaunch" (namestring (merge-pathnames "launch/world.launch" *checkout*)))
-      (expect (loop repeat 150 thereis (search "/map_server" (ros-run "rosnode" "list"))
-                    do (sleep 0.2))
-              "roslaunch launch/world.launch did not bring up /map_server"))))
-
-;;; ------------------------------------------------------------------------------------------
 ;;; Helpers of the checks
 
 (defun btw (name) (find-symbol (string name) "BTW-TUT"))
@@ -165,7 +104,7 @@ x -1.033, y 1.719, z 0.841 in map); the old bound x <= -0.67 cut 7 cm off the to
           "in-package returned ~s" (result-values result)))
 
 ;; the page's shell step before block 2: `roslaunch cram_bullet_world_tutorial world.launch'
-(start-private-ros)
+(start-private-ros "launch/world.launch")
 
 (replay-block 2 (:name "start a ROS node (under roslaunch launch/world.launch)"
                  :completions '((1 "BTW-TUT> (roslisp:" "BTW-TUT> (roslisp:start-ros-node \"bullet_world\")")))
