@@ -155,10 +155,7 @@
         (destroy-chain c))
       (signals-naming ("not a live kinematic chain") (chain-fk c '(0 0))))))
 
-(defparameter *shared-models*
-  (let ((dir (uiop:merge-pathnames* (make-pathname :directory '(:relative :up "shared" "models"))
-                                    (asdf:system-source-directory "cram-plans"))))
-    (namestring (or (probe-file dir) dir)))
+(defparameter *shared-models* (cram-plans-tests:shared-models-directory)
   "../shared/models/ beside the checkout: reference models tests may read, never commit.")
 (defparameter *pr2-urdf* (merge-pathnames "pr2_description/urdf/pr2.urdf" *shared-models*))
 

@@ -2,7 +2,7 @@
 
 (defpackage :cram-plans-tests
   (:use :cl)
-  (:export #:all #:run-all))
+  (:export #:all #:run-all #:shared-models-directory))
 
 (in-package :cram-plans-tests)
 
@@ -20,3 +20,10 @@ Returns true when nothing failed. Counts are per check."
               (length failed))
       (finish-output)
       (null failed))))
+
+(defun shared-models-directory ()
+  "../shared/models/ beside the checkout (as a namestring): reference models that tests and
+benchmarks may read when present, never commit."
+  (let ((dir (uiop:merge-pathnames* (make-pathname :directory '(:relative :up "shared" "models"))
+                                    (asdf:system-source-directory "cram-plans"))))
+    (namestring (or (probe-file dir) dir))))

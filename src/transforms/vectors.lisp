@@ -155,6 +155,22 @@ A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
 
 ;;; Vector arithmetic
 
+(declaim (inline %tame-number-p %tame-vector-p))
+(defun %tame-number-p (x)
+  "True when X is not a real, or is zero, or has a magnitude within 1d-150 .. 1d150 (never for
+NaN or infinity, which the operation's own checks name): sums,
+products and quotients of such numbers stay within double-float range."
+  (or (not (realp x))
+      (and (not (and (floatp x) (or (sb-ext:float-nan-p x) (sb-ext:float-infinity-p x))))
+           (let ((a (abs x))) (or (zerop a) (and (< a 1d150) (> a 1d-150)))))))
+(defun %tame-vector-p (v)
+  "True when every coordinate of the 3D-VECTOR V is zero or within 1d-150 .. 1d150 in magnitude."
+  (flet ((tame (c)
+           (declare (double-float c))
+           (let ((a (abs c))) (or (= a 0d0) (and (< a 1d150) (> a 1d-150))))))
+    (declare (inline tame))
+    (and (tame (%v-x v)) (tame (%v-y v)) (tame (%v-z v)))))
+
 (defmacro define-vector-op (name lambda-list doc &body body)
   "Define NAME as an inline function whose vector arguments are checked to be 3D-VECTORs. A
 floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the arguments."
@@ -167,10 +183,16 @@ floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the argumen
          ,doc
          ,@(loop for v in vectors
                  collect `(unless (3d-vector-p ,v) (input-error ,v "a 3D-VECTOR" ',name)))
-         (handler-case (progn ,@body)
-           (floating-point-overflow ()
-             (input-error (list ,@args) "arguments whose result is within double-float range"
-                          ',name)))))))
+         (flet ((body () ,@body))
+           (declare (inline body))
+           ;; arguments of tame magnitude cannot overflow: no handler on the common path
+           (if (and ,@(loop for a in args
+                            collect (if (member a vectors) `(%tame-vector-p ,a) `(%tame-number-p ,a))))
+               (body)
+               (handler-case (body)
+                 (floating-point-overflow ()
+                   (input-error (list ,@args) "arguments whose result is within double-float range"
+                                ',name)))))))))
 
 (define-vector-op v+ (v1 v2)
   "The sum of the 3D-VECTORs V1 and V2."

@@ -7,15 +7,13 @@
 (require :asdf)
 (require :sb-posix)
 (asdf:load-system "cram-plans/cram-native")
+(asdf:load-system "cram-plans/tests/base")
 
 (defpackage :cram-native-bench (:use :cl :cram-native))
 (in-package :cram-native-bench)
 
 (defparameter *native-dir* (asdf:system-relative-pathname "cram-plans/cram-native" "projection/native/"))
-(defparameter *shared-models*
-  (let ((dir (uiop:merge-pathnames* (make-pathname :directory '(:relative :up "shared" "models"))
-                                    (asdf:system-source-directory "cram-plans"))))
-    (namestring (or (probe-file dir) dir)))
+(defparameter *shared-models* (cram-plans-tests:shared-models-directory)
   "../shared/models/ beside the checkout: reference models tests may read, never commit.")
 (defparameter *pr2-urdf* (merge-pathnames "pr2_description/urdf/pr2.urdf" *shared-models*))
 

@@ -13,6 +13,7 @@
 (require :sb-bsd-sockets)
 (load (merge-pathnames "harness.lisp" cl-user::*seed-directory*))
 (load (merge-pathnames "private-ros.lisp" cl-user::*seed-directory*))
+(load (merge-pathnames "checks.lisp" cl-user::*seed-directory*))
 
 (defun cl-user::seed-run (number)
   "Replay seed NUMBER (a string such as \"000\")."

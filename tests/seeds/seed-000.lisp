@@ -335,7 +335,7 @@ the beginning of a printed line, and the page's printer broke lines elsewhere th
   (expect (equal (cl-transforms-stamped:frame-id (s0-value "*base-pose-near-counter*")) "base_footprint")
           "*base-pose-near-counter* is not in base_footprint as the page writes it"))
 
-(defparameter *s0-move-bottle-1*
+(defparameter *s0-move-bottle-head*
   '((3 "(urdf-proj:" "  (urdf-proj:with-simulated-robot")
     (4 "(let ((?" "    (let ((?navigation-goal *base-pose-near-table*))")
     (5 "(cpl:par"
@@ -345,7 +345,11 @@ the beginning of a printed line, and the page's printer broke lines elsewhere th
                               (type moving-torso)
                               (joint-angle 0.3)))")
     (6 "(pp-plans::" "        (pp-plans::park-arms)")
-    (8 "(exe:" "        (exe:perform (desig:an action")
+    (8 "(exe:" "        (exe:perform (desig:an action"))
+  "Completions of the first lines every move-bottle block of the page shares.")
+
+(defparameter *s0-move-bottle-1*
+  `(,@*s0-move-bottle-head*
     (10 "(target (desig:a location"
      ;; 1 line in the hunk gap
      "                               (target (desig:a location
@@ -479,15 +483,7 @@ the beginning of a printed line, and the page's printer broke lines elsewhere th
           "the forward look direction does not prefer the right arm"))
 
 (defparameter *s0-move-bottle-2*
-  '((3 "(urdf-proj:" "  (urdf-proj:with-simulated-robot")
-    (4 "(let ((?" "    (let ((?navigation-goal *base-pose-near-table*))")
-    (5 "(cpl:par"
-     "      (cpl:par
-        (exe:perform (desig:a motion
-                              (type moving-torso)
-                              (joint-angle 0.3)))")
-    (6 "(pp-plans::" "        (pp-plans::park-arms)")
-    (8 "(exe:" "        (exe:perform (desig:an action")
+  `(,@*s0-move-bottle-head*
     (10 "(target (desig:a location"
      ;; 10 lines in the hunk gap
      "                               (target (desig:a location
@@ -631,16 +627,7 @@ tutorial code (its last function), which fits the hunk counts line for line.")
           (man-int:get-object-type-grasps :bottle nil nil nil :right)))
 
 (defparameter *s0-move-bottle-3*
-  '((3 "(urdf-proj:" "  (urdf-proj:with-simulated-robot")
-    (4 "(let ((?" "    (let ((?navigation-goal *base-pose-near-table*))")
-    (5 "(cpl:par"
-     ;; 3 lines in the hunk gap
-     "      (cpl:par
-        (exe:perform (desig:a motion
-                              (type moving-torso)
-                              (joint-angle 0.3)))")
-    (6 "(pp-plans::" "        (pp-plans::park-arms)")
-    (8 "(exe:" "        (exe:perform (desig:an action")
+  `(,@*s0-move-bottle-head*
     (11 "(pose ?" "                                                (pose ?navigation-goal)))))))")
     (13 "(multiple-value-bind (?" "    (multiple-value-bind (?perceived-bottle ?grasping-arm)")
     (14 "(find-object :bottle)"

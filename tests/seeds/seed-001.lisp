@@ -51,21 +51,9 @@ table leaves of other tags, e.g. `<note>')."
 ;;; Helpers of the checks
 
 (defun btw (name) (find-symbol (string name) "BTW-TUT"))
-(defun world () btr:*current-bullet-world*)
-(defun tut (name)
-  "NAME as the page's code reads it: in BTW-TUT (keywords stay keywords)."
-  (if (keywordp name) name (intern (symbol-name name) "BTW-TUT")))
 (defun obj (name) (btr:object (world) (tut name)))
-(defun xyz (pose)
-  (let ((o (cl-transforms:origin pose)))
-    (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o))))
-(defun near (a b tol) (every (lambda (x y) (<= (abs (- x y)) tol)) a b))
-(defun robot-object () (btr:get-robot-object))
 (defun joint (object name) (btr:joint-state object name))
 (defun prolog-yes (query) (not (null (cut:force-ll (prolog:prolog query)))))
-(defun binding (name answer)
-  "The value of the variable called NAME (any package) in the Prolog ANSWER."
-  (cdr (find name answer :key (lambda (b) (and (symbolp (car b)) (symbol-name (car b)))) :test #'equal)))
 (defun rosparam-get (name)
   "The value `rosparam get NAME' prints, read back from its YAML."
   (uiop:run-program (list "sh" "-c"

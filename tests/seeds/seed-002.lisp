@@ -44,29 +44,13 @@
 ;;; ------------------------------------------------------------------------------------------
 ;;; Helpers of the checks
 
-(defun world () btr:*current-bullet-world*)
-(defun tut (name)
-  "NAME as the page's code reads it: in BTW-TUT (keywords stay keywords)."
-  (if (keywordp name) name (intern (symbol-name name) "BTW-TUT")))
 (defun obj (name) (btr:object (world) (tut name)))
-(defun xyz (pose)
-  (let ((o (cl-transforms:origin pose)))
-    (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o))))
-(defun near (a b tol) (every (lambda (x y) (<= (abs (- x y)) tol)) a b))
-(defun robot-object () (btr:get-robot-object))
 (defun joint (object name) (btr:joint-state object name))
 (defun answers (query) (cut:force-ll (prolog:prolog query)))
-(defun binding (name answer)
-  "The value of the variable called NAME (any package) in the Prolog ANSWER."
-  (cdr (find name answer :key (lambda (b) (and (symbolp (car b)) (symbol-name (car b)))) :test #'equal)))
 (defun visible-p (name)
   (answers `(and (btr:bullet-world ?w) (rob-int:robot ?r) (btr:visible ?w ?r ,(tut name)))))
 (defun stable-p (name) (answers `(and (btr:bullet-world ?w) (btr:stable ?w ,(tut name)))))
 (defun link-xyz (object link) (xyz (btr:link-pose object link)))
-(defun yaw (pose)
-  (let ((q (cl-transforms:orientation pose)))
-    (atan (* 2 (+ (* (cl-transforms:w q) (cl-transforms:z q)) (* (cl-transforms:x q) (cl-transforms:y q))))
-          (- 1 (* 2 (+ (expt (cl-transforms:y q) 2) (expt (cl-transforms:z q) 2)))))))
 (defun park-states (arm)
   (cut:var-value '?j (cut:lazy-car (prolog:prolog `(and (rob-int:robot ?r)
                                                        (rob-int:robot-joint-states ?r :arm ,arm :park ?j))))))

@@ -131,17 +131,8 @@ pairs; a REPL step and the output the page shows for it leave out the prose betw
 
 (defun d (name) (or (find-symbol (string name) :demo) (error "no symbol ~a in DEMO" name)))
 (defun call (name &rest args) (apply (d name) args))
-(defun world () btr:*current-bullet-world*)
 (defun obj (name) (btr:object (world) name))
 (defun pepper () (btr:get-robot-object))
-(defun xyz (pose)
-  (let ((o (cl-transforms:origin pose)))
-    (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o))))
-(defun near (a b tol) (every (lambda (x y) (<= (abs (- x y)) tol)) a b))
-(defun yaw (pose)
-  (let ((q (cl-transforms:orientation pose)))
-    (atan (* 2 (+ (* (cl-transforms:w q) (cl-transforms:z q)) (* (cl-transforms:x q) (cl-transforms:y q))))
-          (- 1 (* 2 (+ (expt (cl-transforms:y q) 2) (expt (cl-transforms:z q) 2)))))))
 (defun joint (name) (btr:joint-state (pepper) name))
 (defun joints-at (states tol)
   "The robot's joints have the values of STATES ((name value) ...), each within TOL."
