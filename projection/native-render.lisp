@@ -8,8 +8,8 @@
   (height :int) (path :string))
 (defcn "cn_write_png" :int (path :string) (rgb :pointer) (width :int) (height :int))
 (defcn "cn_look_at" :int (eye :pointer) (target :pointer) (up :pointer) (conv :int) (out :pointer))
-(defcn "cn_visibility" :int (w :int) (cam :pointer) (conv :int) (fov :double) (width :int)
-  (height :int) (o :int) (l :int) (frac :pointer) (occ :pointer) (cap :int))
+(defcn "cn_visibility_above" :int (w :int) (cam :pointer) (conv :int) (fov :double) (width :int)
+  (height :int) (o :int) (l :int) (min-z :double) (frac :pointer) (occ :pointer) (cap :int))
 
 (defun %convention (c function)
   (case c
@@ -72,15 +72,17 @@ view axis (0 = nothing) when DEPTH, and an (signed-byte 32) vector of (object li
     out))
 
 (defun visibility (world camera-pose object &key (link -1) (convention :optical) (fov 50)
-                                                 (width 128) (height 96))
+                                                 (width 128) (height 96) min-z)
   "Fraction of OBJECT (or one LINK) visible from CAMERA-POSE: its pixels in the scene divided
-by its pixels when rendered alone with the camera turned towards it.  Second value: list of
-the occluding object handles."
+by its pixels when rendered alone with the camera turned towards it; with MIN-Z (metres), only
+the parts of OBJECT above that height count.  Second value: list of the occluding object
+handles."
   (%image-size width height 'visibility)
   (let ((frac (make-dvec 1))
-        (occ (make-array 64 :element-type '(signed-byte 32))))
+        (occ (make-array 64 :element-type '(signed-byte 32)))
+        (min-z (if min-z (real-arg min-z 'visibility "min-z") sb-ext:double-float-negative-infinity)))
     (let ((n (with-pose-pointer (pc camera-pose 'visibility)
                (with-vector-pointers ((pf frac) (po occ))
-                 (ccall "cn_visibility" world pc (%convention convention 'visibility)
-                        (real-arg fov 'visibility "fov") width height object link pf po 64)))))
+                 (ccall "cn_visibility_above" world pc (%convention convention 'visibility)
+                        (real-arg fov 'visibility "fov") width height object link min-z pf po 64)))))
       (values (aref frac 0) (coerce (subseq occ 0 (min n 64)) 'list)))))

@@ -48,8 +48,7 @@ and its whole output; the output is also kept in out/seeds/seed-NUMBER.log."
         #'string<))
 
 (defparameter *known-short*
-  '(("003" 83 "blocks 82-84: the page's products stand 2 cm inside the shelf boards and its own
-viewpoint is the first random visible-for sample, so the 0.9 visibility threshold misses them"))
+  '()
   "Seeds that do not replay completely yet: (NUMBER MINIMUM REASON). The replay must still
 reach MINIMUM blocks (a ratchet against regressions) while its line shows the honest K/N.
 An entry is removed once its seed replays N/N.")

@@ -111,13 +111,44 @@ window and the directory is set. Returns the path or NIL."
       (btr-fail "robot ~s has no camera frame among ~s (rob-int:camera-frame facts)" robot-name frames))
     (link-pose robot frame)))
 
+(defun sunk-below-z (world object)
+  "The height up to which the item OBJECT is sunk into what it stands on, or NIL: the highest
+top of a part of another object (a link of an articulated one; not the robot's) whose bounding
+box holds OBJECT's centre in x and y and whose top lies between OBJECT's bottom and its centre.
+An item spawned a little into a shelf board keeps that part hidden from every camera; it is not
+part of what can be seen."
+  (when (typep object 'item)
+    (multiple-value-bind (lo hi) (aabb object)
+      (let ((bottom (cl-transforms:z lo))
+            (centre (/ (+ (cl-transforms:z lo) (cl-transforms:z hi)) 2))
+            (x (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))
+            (y (/ (+ (cl-transforms:y lo) (cl-transforms:y hi)) 2))
+            (robot (ignore-errors (get-robot-object world)))
+            (best nil))
+        (flet ((consider (slo shi)
+                 (let ((top (cl-transforms:z shi)))
+                   (when (and (> top bottom) (< top centre)
+                              (<= (cl-transforms:x slo) x (cl-transforms:x shi))
+                              (<= (cl-transforms:y slo) y (cl-transforms:y shi))
+                              (or (null best) (> top best)))
+                     (setf best top)))))
+          (dolist (other (objects world))
+            (unless (or (eq other object) (eq other robot))
+              (if (typep other 'robot-object)
+                  (dotimes (i (length (link-names other)))
+                    (multiple-value-call #'consider (aabb other i)))
+                  (multiple-value-call #'consider (aabb other))))))
+        best))))
+
 (defun visibility-fraction (camera-pose object &key (world *current-bullet-world*))
   "The unoccluded share of OBJECT (object or name) seen from CAMERA-POSE (optical convention),
-and the names of the occluding objects."
-  (let ((o (ensure-object world object)))
+and the names of the occluding objects. The part of an item sunk into the board it stands on
+(SUNK-BELOW-Z) counts neither as seen nor as hidden."
+  (let* ((o (ensure-object world object))
+         (min-z (sunk-below-z world o)))
     (multiple-value-bind (fraction occluders)
         (native:visibility (world-handle world) (pose->vector camera-pose "camera pose")
-                           (object-handle o))
+                           (object-handle o) :min-z min-z)
       (values fraction
               (loop for h in occluders for oc = (object-by-handle world h) when oc collect (name oc))))))
 

@@ -110,10 +110,24 @@ void seg_color(int obj, int link) {
 }
 
 // only_obj >= 0: draw only that object (only_link >= 0: only that link)
+// Object whose parts below a height are not drawn (cn_visibility_above), or -1.
+struct ClipBelow {
+  int obj = -1;
+  double z = 0.0;
+};
+ClipBelow g_clip;
+
 void draw_world(GLContext &c, World &w, Mode mode, int only_obj, int only_link) {
   static const float grey[4] = {0.5f, 0.5f, 0.5f, 1.0f};
   for (Object *o : w.objects) {
     if (!o || (only_obj >= 0 && o->id != only_obj)) continue;
+    // the modelview matrix holds the camera here, so the plane is given in world coordinates
+    const bool clip = o->id == g_clip.obj;
+    if (clip) {
+      const GLdouble plane[4] = {0.0, 0.0, 1.0, -g_clip.z};
+      glClipPlane(GL_CLIP_PLANE0, plane);
+      glEnable(GL_CLIP_PLANE0);
+    }
     if (o->kind == CN_BODY) {
       if (mode == SEG) seg_color(o->id, -1);
       draw_items(c, o->shape->draw, o->rb->getWorldTransform(), mode, o->rgba);
@@ -128,6 +142,7 @@ void draw_world(GLContext &c, World &w, Mode mode, int only_obj, int only_link) 
         draw_items(c, m.links[l].visual, o->link_pose[l], mode, ov ? ov : (any_color ? nullptr : grey));
       }
     }
+    if (clip) glDisable(GL_CLIP_PLANE0);
   }
 }
 
@@ -346,6 +361,16 @@ int cn_look_at(const double *eye, const double *target, const double *up, int co
 
 int cn_visibility(int wh, const double *cam7, int convention, double fov, int width, int height,
                   int oh, int link, double *out_fraction, int *occ, int cap) {
+  return cn_visibility_above(wh, cam7, convention, fov, width, height, oh, link, -INFINITY,
+                             out_fraction, occ, cap);
+}
+
+int cn_visibility_above(int wh, const double *cam7, int convention, double fov, int width,
+                        int height, int oh, int link, double min_z, double *out_fraction, int *occ,
+                        int cap) {
+  struct ClipScope {  // the clip ends with the call, also when it fails
+    ~ClipScope() { g_clip = ClipBelow(); }
+  } clip_scope;
   return guard([&] {
     World &w = world(wh);
     Object &o = w.obj(oh, "target object");
@@ -356,8 +381,14 @@ int cn_visibility(int wh, const double *cam7, int convention, double fov, int wi
     check_ptr(out_fraction, "fraction output");
     if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
     if (cap > 0) check_ptr(occ, "occluder output");
+    if (std::isnan(min_z) || min_z == INFINITY)
+      fail(CN_E_ARG, "min_z is %g, expected a height in metres or -inf", min_z);
     Camera cam = read_camera(cam7, convention, fov, width, height, 0.05, 50.0);
     GLContext &c = gl_context(width, height);
+    if (std::isfinite(min_z)) {
+      g_clip.obj = oh;
+      g_clip.z = min_z;
+    }
     const size_t N = (size_t)width * height;
     auto is_target = [&](const unsigned char *px) {
       int ob, l;

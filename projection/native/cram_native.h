@@ -195,6 +195,11 @@ int cn_look_at(const double *eye3, const double *target3, const double *up3, int
 int cn_visibility(int world, const double *camera7, int convention, double fov_y_deg,
                   int width, int height, int obj, int link, double *out_fraction,
                   int *out_occluders, int cap);
+/* Same, counting only the parts of the object above the height min_z (world z): the part of
+ * an item sunk into the board it stands on is seen by no camera.  min_z -inf: all of it. */
+int cn_visibility_above(int world, const double *camera7, int convention, double fov_y_deg,
+                        int width, int height, int obj, int link, double min_z,
+                        double *out_fraction, int *out_occluders, int cap);
 
 /* ---- inverse kinematics (KDL) -------------------------------------------------------------- */
 int cn_chain_create(int world, int robot, const char *base_link, const char *tip_link);
