@@ -12,6 +12,7 @@ namespace cn {
 
 static std::atomic<uint64_t> g_mesh_ids{1};
 RenderMesh::RenderMesh() : id(g_mesh_ids++) {}
+RenderMesh::~RenderMesh() { forget_render_mesh(id); }
 
 double shape_margin() { return 0.001; }
 

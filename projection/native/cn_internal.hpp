@@ -129,7 +129,9 @@ struct RenderMesh {
   std::vector<float> pos;       // 9 per triangle
   std::vector<float> nrm;       // 9 per triangle
   RenderMesh();
+  ~RenderMesh();                // its display list goes with it (forget_render_mesh)
 };
+void forget_render_mesh(uint64_t id);  // cn_render.cpp
 using RenderMeshP = std::shared_ptr<const RenderMesh>;
 
 struct RenderItem {

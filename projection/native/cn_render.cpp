@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 
 namespace cn {
 
@@ -21,16 +22,43 @@ struct GLContext {
     if (ctx) OSMesaDestroyContext(ctx);
   }
 };
-thread_local std::unique_ptr<GLContext> t_gl;
+// One context for the process, shared by every thread that renders (plans run in threads of
+// their own): its compiled shaders and display lists outlive the threads. GL_MUTEX serialises
+// its use; the caller holds it for a whole render.
+std::unique_ptr<GLContext> g_gl;
+std::recursive_mutex &gl_mutex() {
+  static std::recursive_mutex m;
+  return m;
+}
+
+// Display lists of meshes that no longer exist, deleted at the next render. Never destroyed:
+// meshes held by static objects of other files may go after this file's statics.
+std::mutex &g_dead_mutex = *new std::mutex;
+std::vector<uint64_t> &g_dead_meshes = *new std::vector<uint64_t>;
+
+void delete_dead_lists(GLContext &c) {
+  std::vector<uint64_t> dead;
+  {
+    std::lock_guard<std::mutex> lock(g_dead_mutex);
+    dead.swap(g_dead_meshes);
+  }
+  for (uint64_t id : dead) {
+    auto it = c.lists.find(id);
+    if (it != c.lists.end()) {
+      glDeleteLists(it->second, 1);
+      c.lists.erase(it);
+    }
+  }
+}
 
 GLContext &gl_context(int w, int h) {
-  if (!t_gl) {
+  if (!g_gl) {
     auto c = std::make_unique<GLContext>();
     c->ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
     if (!c->ctx) fail(CN_E_RENDER, "OSMesaCreateContextExt failed (no software renderer?)");
-    t_gl = std::move(c);
+    g_gl = std::move(c);
   }
-  GLContext &c = *t_gl;
+  GLContext &c = *g_gl;
   if (c.w != w || c.h != h || OSMesaGetCurrentContext() != c.ctx) {
     if ((size_t)w * h * 4 > c.buf.size()) c.buf.resize((size_t)w * h * 4);
     if (!OSMesaMakeCurrent(c.ctx, c.buf.data(), GL_UNSIGNED_BYTE, w, h))
@@ -38,8 +66,18 @@ GLContext &gl_context(int w, int h) {
     c.w = w;
     c.h = h;
   }
+  delete_dead_lists(c);
   return c;
 }
+
+}  // namespace
+
+void forget_render_mesh(uint64_t id) {
+  std::lock_guard<std::mutex> lock(g_dead_mutex);
+  g_dead_meshes.push_back(id);
+}
+
+namespace {
 
 GLuint mesh_list(GLContext &c, const RenderMesh &m) {
   auto it = c.lists.find(m.id);
@@ -238,6 +276,7 @@ void write_png_file(const char *path, const unsigned char *rgb, int w, int h) {
 }
 
 void render_impl(World &w, const Camera &cam, unsigned char *rgb, double *depth, int *seg) {
+  std::lock_guard<std::recursive_mutex> gl_lock(gl_mutex());
   GLContext &c = gl_context(cam.w, cam.h);
   const int W = cam.w, H = cam.h;
   if (rgb || depth) {
@@ -384,6 +423,7 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
     if (std::isnan(min_z) || min_z == INFINITY)
       fail(CN_E_ARG, "min_z is %g, expected a height in metres or -inf", min_z);
     Camera cam = read_camera(cam7, convention, fov, width, height, 0.05, 50.0);
+    std::lock_guard<std::recursive_mutex> gl_lock(gl_mutex());
     GLContext &c = gl_context(width, height);
     if (std::isfinite(min_z)) {
       g_clip.obj = oh;

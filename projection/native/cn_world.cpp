@@ -337,6 +337,14 @@ struct KinematicRest {
     dw->setForceUpdateAllAabbs(true);
   }
 };
+bool any_dynamic_body_awake(World &w) {
+  btCollisionObjectArray &all = w.dw->getCollisionObjectArray();
+  for (int i = 0; i < all.size(); ++i) {
+    const btCollisionObject *co = all[i];
+    if (!co->isStaticOrKinematicObject() && co->isActive()) return true;
+  }
+  return false;
+}
 }  // namespace
 
 extern "C" {
@@ -360,7 +368,9 @@ int cn_world_simulate(int wh, double seconds, double dt) {
     if (steps > 1e8) fail(CN_E_ARG, "simulate %g s at dt %g needs %g steps, limit 1e8", seconds, dt, steps);
     int n = (int)steps;
     KinematicRest rest(w);
-    for (int i = 0; i < n; ++i) w.dw->stepSimulation(dt, 0, dt);
+    // Once every dynamic body sleeps (Bullet zeroes the velocities of a sleeping island) the
+    // remaining steps would change nothing: the world is then as after all n steps.
+    for (int i = 0; i < n && any_dynamic_body_awake(w); ++i) w.dw->stepSimulation(dt, 0, dt);
     return n;
   });
 }

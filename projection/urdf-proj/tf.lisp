@@ -48,25 +48,65 @@ BTR:LINK-NAMES."
                                                  (cl-transforms:rotation transform))
    :static static))
 
-(defun publish-object-links (transformer object parent-frame stamp &key skip)
+(defun relative-pose-into (v p c out)
+  "Fill OUT (7 doubles) with pose number C of the pose vector V expressed in pose number P:
+inverse(P) * C, translation and quaternion."
+  (declare (type (simple-array double-float (*)) v out) (type fixnum p c)
+           (optimize (speed 3) (safety 0)))
+  (let* ((i (* 7 p)) (j (* 7 c))
+         (px (aref v i)) (py (aref v (+ i 1))) (pz (aref v (+ i 2)))
+         ;; conjugate of P's rotation
+         (qx (- (aref v (+ i 3)))) (qy (- (aref v (+ i 4)))) (qz (- (aref v (+ i 5)))) (qw (aref v (+ i 6)))
+         (dx (- (aref v j) px)) (dy (- (aref v (+ j 1)) py)) (dz (- (aref v (+ j 2)) pz))
+         (cx (aref v (+ j 3))) (cy (aref v (+ j 4))) (cz (aref v (+ j 5))) (cw (aref v (+ j 6))))
+    (declare (type double-float px py pz qx qy qz qw dx dy dz cx cy cz cw))
+    ;; rotate d by q: d + 2w(q×d) + 2 q×(q×d)
+    (let* ((tx (* 2 (- (* qy dz) (* qz dy))))
+           (ty (* 2 (- (* qz dx) (* qx dz))))
+           (tz (* 2 (- (* qx dy) (* qy dx)))))
+      (setf (aref out 0) (+ dx (* qw tx) (- (* qy tz) (* qz ty)))
+            (aref out 1) (+ dy (* qw ty) (- (* qz tx) (* qx tz)))
+            (aref out 2) (+ dz (* qw tz) (- (* qx ty) (* qy tx)))))
+    (setf (aref out 3) (+ (* qw cx) (* qx cw) (- (* qy cz) (* qz cy)))
+          (aref out 4) (+ (* qw cy) (* qy cw) (- (* qz cx) (* qx cz)))
+          (aref out 5) (+ (* qw cz) (* qz cw) (- (* qx cy) (* qy cx)))
+          (aref out 6) (- (* qw cw) (* qx cx) (* qy cy) (* qz cz)))
+    out))
+
+(defun pose-vector-transform (v)
+  "The CL-TRANSFORMS:TRANSFORM of the 7 doubles V."
+  (cl-transforms:make-transform
+   (cl-transforms:make-3d-vector (aref v 0) (aref v 1) (aref v 2))
+   (cl-transforms:make-quaternion (aref v 3) (aref v 4) (aref v 5) (aref v 6))))
+
+(defun same-pose-vector-p (a b)
+  (declare (type (simple-array double-float (*)) a b) (optimize (speed 3) (safety 0)))
+  (loop for i of-type fixnum below 7 always (< (abs (- (aref a i) (aref b i))) 1d-10)))
+
+(defun publish-object-links (transformer object parent-frame stamp &key skip cache)
   "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
-with the map) and every link under its parent link. Links named in the hash table SKIP are left out. Returns the names written."
+with the map) and every link under its parent link. Links named in the hash table SKIP are
+left out. With CACHE (a hash table link name → the last 7 doubles written), a link whose pose
+relative to its parent is unchanged is not written again. Returns the names of all the links
+of OBJECT in TF."
   (let* ((names (coerce (btr:link-names object) 'simple-vector))
          (poses (link-poses-vector object))
          (root (cl-urdf:name (cl-urdf:root-link (btr:urdf object))))
          (root-i (position root names :test #'string=))
+         (scratch (make-array 7 :element-type 'double-float))
          (written '()))
-    (unless (and skip (gethash root skip))
-      (set-tf transformer parent-frame root (vector-transform poses root-i) stamp)
-      (push root written))
-    (loop for (p . c) across (link-tree object)
-          for child = (svref names c)
-          unless (and skip (gethash child skip))
-            do (set-tf transformer (svref names p) child
-                       (cl-transforms:transform* (cl-transforms:transform-inv (vector-transform poses p))
-                                                 (vector-transform poses c))
-                       stamp)
-               (push child written))
+    (flet ((write-link (parent child relative)
+             (let ((last (and cache (gethash child cache))))
+               (unless (and last (same-pose-vector-p last relative))
+                 (set-tf transformer parent child (pose-vector-transform relative) stamp)
+                 (when cache (setf (gethash child cache) (copy-seq relative)))))
+             (push child written)))
+      (unless (and skip (gethash root skip))
+        (write-link parent-frame root (subseq poses (* 7 root-i) (* 7 (1+ root-i)))))
+      (loop for (p . c) across (link-tree object)
+            for child = (svref names c)
+            unless (and skip (gethash child skip))
+              do (write-link (svref names p) child (relative-pose-into poses p c scratch))))
     written))
 
 (defun environment-signature (object)
@@ -100,9 +140,14 @@ whole or not at all. Returns TRANSFORMER."
                             odom)
                      cram-tf:*fixed-frame*))
          (robot-frames (make-hash-table :test 'equal)))
-    (dolist (l (publish-object-links transformer robot parent stamp))
-      (setf (gethash l robot-frames) t))
     (let ((signatures (or *environment-tf-signatures* (make-hash-table :test 'eq))))
+      ;; the robot's links under its own key (the robot object): only the changed ones
+      (when force (remhash robot signatures))
+      (dolist (l (publish-object-links transformer robot parent stamp
+                                       :cache (or (gethash robot signatures)
+                                                  (setf (gethash robot signatures)
+                                                        (make-hash-table :test 'equal)))))
+        (setf (gethash l robot-frames) t))
       (dolist (o (btr:objects world))
         (when (and (typep o 'btr:robot-object) (not (eq o robot)))
           (let ((signature (environment-signature o)))

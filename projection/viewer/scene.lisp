@@ -159,7 +159,8 @@ with the file's bytes in base64 (a replay that opens from disk)."
 ;;; ---- articulated objects ------------------------------------------------------------------------
 
 (defvar *model-cache* (make-hash-table :test 'eq :weakness :key :synchronized t)
-  "Kinematic model (shared by a world's copies) → its colourless JSON description.")
+  "Parsed URDF (the same for the models of every belief state built from it) → the colourless
+JSON description of its model.")
 
 (defun link-visual-specs (link)
   "The (origin geometry colour) triples the shim draws for the CL-URDF LINK: its visuals, or
@@ -173,8 +174,9 @@ its collision geometry (colour NIL) when it has none."
   "The colourless description of ROBOT's model: link names, joints (shim order, with origin,
 axis, type, parent and child link indices) and the visuals of every link."
   (let ((model (btr::%model robot)))
-    (or (gethash model *model-cache*)
-        (setf (gethash model *model-cache*)
+    ;; keyed on the parsed URDF: a new belief state builds a new model of the same URDF
+    (or (gethash (btr:urdf robot) *model-cache*)
+        (setf (gethash (btr:urdf robot) *model-cache*)
               (let* ((urdf (btr:urdf robot))
                      (links (btr::km-link-names model))
                      (joints (loop for name across (btr::km-joint-names model)
@@ -225,18 +227,39 @@ CAMERA-FRAME facts), or NIL."
          (frame (find-if (lambda (f) (and (stringp f) (btr:link-exists-p robot f))) frames)))
     (and frame (obj "link" frame "fov" *camera-fov* "aspect" (/ 4d0 3)))))
 
+(defvar *descriptor-cache* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Parsed URDF of an articulated object → (key . descriptor) of the last one described:
+descriptors are not modified after they are made, so an object with the same name, types,
+URDF, link colours and camera shares it.")
+
+(defun link-colours (robot description)
+  "The colour of every link of ROBOT that has a visual in DESCRIPTION, in order."
+  (let ((seen '()))
+    (loop for (i) in (getf description :visuals)
+          unless (member i seen)
+            do (push i seen)
+            and collect (btr:object-color robot i))))
+
 (defun object-descriptor (object)
   "The JSON description of OBJECT (a BTR object) for the page: name, kind (body or
 articulated), types, shapes with colours and, for articulated objects, links and joints."
   (let ((name (string-downcase (princ-to-string (btr:name object))))
         (types (mapcar (lambda (ty) (string-downcase (princ-to-string ty))) (btr:item-types object))))
     (if (typep object 'btr:robot-object)
-        (let ((d (model-description object)))
-          (obj "name" name "kind" "articulated" "types" types
-               "urdf" (cl-urdf:name (btr:urdf object))
-               "links" (getf d :links) "joints" (getf d :joints) "root" (getf d :root)
-               "visuals" (coloured-visuals object d)
-               "camera" (camera-description object)))
+        (let* ((d (model-description object))
+               (camera (camera-description object))
+               (key (list name types (link-colours object d) (and camera (gethash "link" camera))))
+               (cache (gethash (btr:urdf object) *descriptor-cache*)))
+          ;; a new belief state builds the same kitchen and robot again: describe them once
+          (or (and cache (equal (car cache) key) (cdr cache))
+              (let ((descriptor
+                      (obj "name" name "kind" "articulated" "types" types
+                           "urdf" (cl-urdf:name (btr:urdf object))
+                           "links" (getf d :links) "joints" (getf d :joints) "root" (getf d :root)
+                           "visuals" (coloured-visuals object d)
+                           "camera" camera)))
+                (setf (gethash (btr:urdf object) *descriptor-cache*) (cons key descriptor))
+                descriptor)))
         (obj "name" name "kind" "body" "types" types
              "visuals" (list (obj "link" -1 "origin" '(0 0 0 0 0 0 1)
                                   "geometry" (body-geometry object)
