@@ -21,13 +21,14 @@ PACKAGES := sbcl cl-cffi cl-alexandria cl-fiveam cl-cxml cl-puri cl-ppcre \
   cl-actionlib-msgs cl-move-base-msgs cl-trajectory-msgs libtf2-dev libtf2-ros-dev ros-robot-state-publisher joint-state-publisher \
   rviz xvfb imagemagick x11-apps cl-hunchentoot libjs-three chromium
 BENCH_PACKAGES := swi-prolog-nox
+SLURM_PACKAGES := slurm-wlm munge
 
 SBCL := sbcl --noinform --non-interactive --no-userinit --no-sysinit \
         --eval '(require :asdf)'
 NATIVE_LIB := projection/native/build/libcram_native.so
 OUT ?= out
 
-.PHONY: all setup setup-bench build native lisp test demo bench check-native clean
+.PHONY: all setup setup-bench build native lisp test demo bench check-native check-slurm clean
 
 all: build
 
@@ -75,6 +76,17 @@ bench: build setup-bench
 
 check-native: native
 	$(MAKE) -C projection/native check
+
+# A private single-node Slurm on this machine runs a campaign as a job array (tools/slurm/);
+# installs slurm-wlm and munge when missing.
+check-slurm: build
+	@missing=$$(dpkg-query -W -f='$${Package} $${Status}\n' $(SLURM_PACKAGES) 2>/dev/null \
+	   | awk '$$NF=="installed"{print $$1}' | sort | comm -13 - <(tr ' ' '\n' <<< "$(SLURM_PACKAGES)" | grep . | sort)); \
+	if [ -n "$$missing" ]; then \
+	  echo "check-slurm: installing $$missing"; \
+	  apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $(SLURM_PACKAGES); \
+	fi
+	tests/slurm-check.sh
 
 clean:
 	$(MAKE) -C projection/native clean

@@ -97,7 +97,9 @@ attachments and collision filters as WORLD; collision shapes are shared."
   world)
 
 (defun simulate (world seconds &optional (dt (/ 1d0 240)))
-  "Advance WORLD by ceil(SECONDS/DT) steps of DT; return the number of steps."
+  "Advance WORLD by ceil(SECONDS/DT) steps of DT; return the number of steps. Stepping stops
+early once every dynamic body sleeps or has moved slower than 1 mm/s and 0.01 rad/s for 0.1 s
+of simulated time: the remaining steps would leave the world as it is."
   (ccall "cn_world_simulate" world (real-arg seconds 'simulate "seconds")
          (real-arg dt 'simulate "dt")))
 

@@ -118,3 +118,27 @@ pairs the whole-world collision pass finds for it: 20 seeded random scenes and a
               (dolist (p (with-r ours -2d-3))
                 (is (member p (with-r all 2d-3) :test #'equal))))))))
     (is (> checked 5) "only ~d penetrating pairs over all scenes" checked)))
+
+(test simulate-stops-early-only-when-nothing-moves
+  "SIMULATE skips the steps after every dynamic body has come to rest: a dropped box ends where
+single steps put it, and a box balanced past its edge still falls over."
+  (flet ((drop-box (stepper)
+           (with-world (w)
+             (add-plane w)
+             (let ((b (add-box w '(0 0 0.6 0 0 0 1) '(0.1 0.1 0.1) :mass 1)))
+               (funcall stepper w)
+               (coerce (object-pose w b) 'list)))))
+    (let ((early (drop-box (lambda (w) (simulate w 3 0.01d0))))
+          (every-step (drop-box (lambda (w) (dotimes (i 300) (step-world w 0.01d0))))))
+      (is (< (abs (- (third early) 0.05d0)) 2d-3) "the box does not rest on the floor: ~a" early)
+      (is (< (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2))
+                                       (subseq early 0 3) (subseq every-step 0 3))))
+             1d-3)
+          "early stop ~a, every step ~a" early every-step)))
+  (with-world (w)
+    (add-plane w)
+    ;; a tall box on a narrow ledge, its centre 1 cm beyond the ledge's edge, starts at rest
+    (add-box w '(0 0 0.25 0 0 0 1) '(0.2 0.2 0.5))
+    (let ((tall (add-box w '(0.11 0 0.7 0 0 0 1) '(0.04 0.04 0.4) :mass 1)))
+      (simulate w 3 0.01d0)
+      (is (< (aref (object-pose w tall) 2) 0.5d0) "the box did not fall: ~a" (object-pose w tall)))))

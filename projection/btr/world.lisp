@@ -138,7 +138,8 @@ Collision shapes are shared, so copying is cheap."
         (princ-to-string world))))
 
 (defun simulate (world seconds &optional (dt 0.01d0))
-  "Advance WORLD's physics by SECONDS in steps of DT (ceiling of SECONDS/DT steps)."
+  "Advance WORLD's physics by SECONDS in steps of DT (ceiling of SECONDS/DT steps; once nothing
+moves any more, the remaining steps are skipped, see CRAM-NATIVE:SIMULATE)."
   (check-world world 'simulate)
   (unless (and (finite-real-p seconds) (>= seconds 0))
     (btr-fail "SIMULATE: seconds is ~s, expected a finite non-negative real" seconds))

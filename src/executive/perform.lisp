@@ -27,12 +27,15 @@ Every call is logged at :INFO with its designator, `[(PERFORM ACTION) INFO] <tim
     (if (and type (symbolp type)) type :unknown)))
 
 (defun log-performing (kind designator)
-  "CRAM's line for every PERFORM: `[(PERFORM ACTION) INFO] <time>: ' and the designator."
-  (cpl:log-message :info (list 'perform kind) "~%~a~%" designator))
+  "CRAM's line for every PERFORM: `[(PERFORM ACTION) INFO] <time>: ' and the designator.
+Returns what the task tree node shows for DESIGNATOR: the text just logged (printed once), or
+DESIGNATOR itself when the level filtered the line out."
+  (let ((message (cpl:log-message :info (list 'perform kind) "~%~a~%" designator)))
+    (if message (string-trim '(#\Newline) message) designator)))
 
 (defmethod perform ((designator desig:motion-designator))
-  (log-performing 'motion designator)
-  (cpl:with-task-tree-node (:motion (designator-kind-name designator) :designator designator)
+  (cpl:with-task-tree-node (:motion (designator-kind-name designator)
+                            :designator (log-performing 'motion designator))
     (let ((modules (cpm:matching-process-modules designator)))
       (when (null modules)
         (cpl:fail 'cpm:no-matching-process-module :designator designator))
@@ -64,14 +67,14 @@ grounding. Returns (values function arguments)."
   (every (lambda (goal) (coe:holds goal)) goals))
 
 (defmethod perform ((designator desig:action-designator))
-  (log-performing 'action designator)
-  (let ((goals (desig:desig-prop-values designator :goal)))
+  (let ((shown (log-performing 'action designator))
+        (goals (desig:desig-prop-values designator :goal)))
     (if (and goals (goals-hold-p goals))
         (progn
           (cpl:log-message :info '(perform action) "Action goal `~a' already achieved." goals)
           nil)
         (cpl:with-task-tree-node (:action (designator-kind-name designator)
-                                  :designator designator)
+                                  :designator shown)
           (multiple-value-bind (function arguments)
               (action-plan-arguments (desig:reference designator))
             (check-plan-function function designator)

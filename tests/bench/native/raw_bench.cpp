@@ -194,7 +194,25 @@ int main() {
     c.add(&plane, 0, btTransform::getIdentity(), 2, -1 ^ 2);
     for (int i = 0; i < 33; ++i)
       c.add(&small, 1, btTransform(btQuaternion::getIdentity(), btVector3((i % 6) * 0.3, (i / 6) * 0.3, 0.3 + 0.12 * (i % 3))), 1, -1);
-    for (int s = 0; s < 240; ++s) c.dw->stepSimulation(1.0 / 240, 0, 1.0 / 240);
+    // the shim's loop: stop once every dynamic body sleeps or rested (< 1 cm/s, 0.1 rad/s)
+    // for 0.1 s of simulated time
+    double quiet = 0;
+    for (int s = 0; s < 240; ++s) {
+      bool awake = false, resting = true;
+      auto &objs = c.dw->getCollisionObjectArray();
+      for (int i = 0; i < objs.size(); ++i)
+        if (!objs[i]->isStaticOrKinematicObject() && objs[i]->isActive()) awake = true;
+      if (!awake) break;
+      c.dw->stepSimulation(1.0 / 240, 0, 1.0 / 240);
+      for (int i = 0; i < objs.size(); ++i) {
+        auto *rb = btRigidBody::upcast(objs[i]);
+        if (!rb || rb->isStaticOrKinematicObject() || !rb->isActive()) continue;
+        if (rb->getLinearVelocity().length() >= 1e-2 || rb->getAngularVelocity().length() >= 1e-1)
+          resting = false;
+      }
+      quiet = resting ? quiet + 1.0 / 240 : 0;
+      if (quiet >= 0.1 - 1e-12) break;
+    }
   }, 5);
   printf("teleport-contacts %.9g\njoints-collision %.9g\n", t_telq, t_fkcol);
   printf("teleport %.9g\njoints-and-poses %.9g\nrobot-collision %.9g\ncopy %.9g\nsimulate %.9g\n",
