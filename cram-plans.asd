@@ -242,8 +242,33 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
                "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
-               "cram-plans/compat" "cram-plans/replay"
+               "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
                (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
+
+(defsystem "cram-plans/cram-ros-pms/package"
+  :description "The light part of the robot process modules: package CRAM-ROS-PMS (PR2-PMS),
+ROBOT-CONNECTION-ERROR and WITH-REAL-ROBOT, which loads cram-plans/cram-ros-pms on first use."
+  :pathname "src/robot-ros/"
+  :components ((:file "package")))
+
+(defsystem "cram-plans/cram-ros-pms"
+  :description "Plans on a robot over ROS 1 (docs/robot-over-ros.md): process modules for
+move_base, joint trajectory controllers and perception/objects, an actionlib client, and the
+belief state following /joint_states and TF."
+  :depends-on ("cram-plans/cram-ros-pms/package" "cram-plans/roslisp-utilities/ros"
+               "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-common-designators" "cram-plans/cram-executive"
+               "roslisp" "sensor_msgs-msg" "trajectory_msgs-msg" "move_base_msgs-msg"
+               "actionlib_msgs-msg" "visualization_msgs-msg" "tf2_msgs-msg" "geometry_msgs-msg"
+               "std_msgs-msg" "sb-posix" "sb-bsd-sockets")
+  :pathname "src/robot-ros/"
+  :serial t
+  :components ((:file "connection")
+               (:file "actionlib")
+               (:file "robot")
+               (:file "motions")
+               (:file "process-modules")
+               (:file "sim-robot")))
 
 (defsystem "cram-plans/replay"
   :description "Recording of projection runs for the browser viewer (CRAM-VIEWER): states after
@@ -448,7 +473,14 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
-               "cram-plans/tests/bad-input" "cram-plans/tests/readme"))
+               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"))
+
+(defsystem "cram-plans/tests/robot-ros"
+  :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-ros-pms" "cram-plans/cram-bullet-world-tutorial"
+               "sb-posix")
+  :pathname "tests/"
+  :components ((:file "robot-ros-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."

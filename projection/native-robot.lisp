@@ -20,12 +20,28 @@
 (defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
 (defcn "cn_robot_set_self_collision" :int (w :int) (r :int) (on :int))
 
+(defvar *urdf-foreign-strings* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "URDF text (a Lisp string) → (length . its UTF-8 copy in foreign memory), freed with it: a
+belief state built again from the same URDF does not encode the text again.")
+
+(defun urdf-foreign-string (string)
+  "The foreign UTF-8 copy of STRING, made once per string object (and again if its length
+changed)."
+  (let ((entry (gethash string *urdf-foreign-strings*)))
+    (if (and entry (= (car entry) (length string)))
+        (cdr entry)
+        (let ((pointer (cffi:foreign-string-alloc string :encoding :utf-8)))
+          (sb-ext:finalize string (lambda () (cffi:foreign-string-free pointer)) :dont-save t)
+          (setf (gethash string *urdf-foreign-strings*) (cons (length string) pointer))
+          pointer))))
+
 (defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes)
   "Add the articulated object described by URDF-STRING at base POSE: one kinematic body per
 link with collision geometry, every joint at 0.  EXACT-MESHES: collision meshes as exact
 triangle meshes (for static environments) instead of convex hulls.  Returns its handle."
   (with-pose-pointer (p pose 'add-urdf)
-    (ccall "cn_robot_add_urdf" world (string-arg urdf-string 'add-urdf "URDF") p
+    (ccall "cn_robot_add_urdf" world
+           (urdf-foreign-string (string-arg urdf-string 'add-urdf "URDF")) p
            (if exact-meshes 1 0))))
 
 (defun %name-out (fn world robot index)

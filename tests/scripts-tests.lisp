@@ -7,7 +7,7 @@
 (in-package :cram-scripts-tests)
 
 (def-suite scripts :in cram-plans-tests:all
-  :description "Shell checks: the shipped models and the ROS launch files.")
+  :description "Shell checks: the shipped models, the ROS launch files and the simulated robot node.")
 (in-suite scripts)
 
 (defun run-check-script (name)
@@ -20,7 +20,11 @@
       (declare (ignore err))
       (let* ((line (find-if (lambda (l) (search " passed, " l))
                             (reverse (uiop:split-string out :separator '(#\Newline)))))
-             (passed (and line (parse-integer line :junk-allowed t)))
+             ;; "N passed, M failed", possibly after the script's name ("name: N passed, ...")
+             (passed (and line (let* ((end (search " passed, " line))
+                                      (start (position-if-not #'digit-char-p line :end end :from-end t)))
+                                 (parse-integer line :start (if start (1+ start) 0) :end end
+                                                     :junk-allowed t))))
              (failed (and line (parse-integer line :start (+ (search " passed, " line) 9)
                                                    :junk-allowed t))))
         (values code out passed failed)))))
@@ -35,3 +39,4 @@
 
 (def-script-test models-check "models-check.sh" 8)
 (def-script-test ros-launch-check "ros-launch-check.sh" 20)
+(def-script-test sim-robot-check "sim-robot-check.sh" 25)
