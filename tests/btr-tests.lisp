@@ -173,6 +173,20 @@
     (btr:remove-object w 'wall)
     (is-true (btr::object-visible-p w camera 'target))))
 
+(test visibility-fraction-of-a-half-hidden-box
+  ;; a wall hides the half of the box with y > 0; far objects outside the view change nothing
+  (let* ((w (fresh-world))
+         (camera (btr::vector->pose (cram-native:look-at '(-2 0 1) '(0 0 1)))))
+    (btr:add-object w :box 'target '((0 0 1) (0 0 0 1)) :size '(0.2 0.2 0.2))
+    (btr:add-object w :box 'wall '((-1 0.5 1) (0 0 0 1)) :size '(0.1 1 1))
+    (btr:add-object w :box 'elsewhere '((-1 -3 1) (0 0 0 1)) :size '(0.5 0.5 0.5))
+    (multiple-value-bind (fraction occluders) (btr:visibility-fraction camera 'target :world w)
+      (is (< 0.4 fraction 0.6) "fraction ~a" fraction)
+      (is (equal '(wall) occluders)))
+    ;; behind the camera: not in the picture
+    (btr:add-object w :box 'behind '((-3 0 1) (0 0 0 1)) :size '(0.2 0.2 0.2))
+    (is (= 0 (btr:visibility-fraction camera 'behind :world w)))))
+
 (test visibility-leaves-out-the-part-sunk-into-a-board
   ;; a cereal box (0.224 m high) stands 3 cm deep in a board, as the shop demo's page spawns it
   (let* ((w (fresh-world))

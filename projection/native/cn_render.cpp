@@ -18,6 +18,7 @@ struct GLContext {
   std::vector<unsigned char> buf;
   int w = 0, h = 0;
   std::unordered_map<uint64_t, GLuint> lists;
+  std::unordered_map<uint64_t, std::pair<btVector3, btVector3>> bounds;
   ~GLContext() {
     if (ctx) OSMesaDestroyContext(ctx);
   }
@@ -48,6 +49,7 @@ void delete_dead_lists(GLContext &c) {
       glDeleteLists(it->second, 1);
       c.lists.erase(it);
     }
+    c.bounds.erase(id);
   }
 }
 
@@ -95,6 +97,19 @@ GLuint mesh_list(GLContext &c, const RenderMesh &m) {
   return l;
 }
 
+const std::pair<btVector3, btVector3> &mesh_bounds(GLContext &c, const RenderMesh &m) {
+  auto it = c.bounds.find(m.id);
+  if (it != c.bounds.end()) return it->second;
+  btVector3 lo(0, 0, 0), hi(0, 0, 0);
+  for (size_t i = 0; i + 2 < m.pos.size(); i += 3) {
+    btVector3 p(m.pos[i], m.pos[i + 1], m.pos[i + 2]);
+    if (i == 0) lo = hi = p;
+    lo.setMin(p);
+    hi.setMax(p);
+  }
+  return c.bounds[m.id] = {lo, hi};
+}
+
 struct Camera {
   btTransform pose;   // world <- camera (convention frame)
   int convention;
@@ -125,9 +140,43 @@ void setup_camera(const Camera &cam) {
 enum Mode { COLOR, SEG };
 
 // draws object o (link -1: all) ; returns nothing
+// Screen rectangle outside which nothing needs drawing (the visibility query's scene render
+// only looks at the target's pixels): items whose bounding box projects outside it are skipped.
+struct Cull {
+  bool on = false;
+  btTransform view;              // camera (GL convention) <- world
+  double near_m = 0, right = 0, top = 0;
+  int w = 0, h = 0;
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // pixel rectangle, inclusive
+};
+Cull g_cull;
+
+// local bounds of a mesh (its vertices), computed once per mesh
+const std::pair<btVector3, btVector3> &mesh_bounds(GLContext &c, const RenderMesh &m);
+
+bool culled(GLContext &c, const RenderItem &it, const btTransform &frame) {
+  if (!g_cull.on) return false;
+  const auto &b = mesh_bounds(c, *it.mesh);
+  const btTransform t = g_cull.view * frame * it.local;
+  double px0 = 1e300, py0 = 1e300, px1 = -1e300, py1 = -1e300;
+  for (int k = 0; k < 8; ++k) {
+    btVector3 corner((k & 1 ? b.second : b.first).x() * it.scale.x(),
+                     (k & 2 ? b.second : b.first).y() * it.scale.y(),
+                     (k & 4 ? b.second : b.first).z() * it.scale.z());
+    btVector3 pc = t * corner;
+    if (pc.z() > -g_cull.near_m) return false;  // reaches behind the near plane: draw it
+    double x = (pc.x() * g_cull.near_m / -pc.z() / g_cull.right + 1) * 0.5 * g_cull.w;
+    double y = (pc.y() * g_cull.near_m / -pc.z() / g_cull.top + 1) * 0.5 * g_cull.h;
+    px0 = std::min(px0, x); px1 = std::max(px1, x);
+    py0 = std::min(py0, y); py1 = std::max(py1, y);
+  }
+  return px1 < g_cull.x0 - 1 || px0 > g_cull.x1 + 2 || py1 < g_cull.y0 - 1 || py0 > g_cull.y1 + 2;
+}
+
 void draw_items(GLContext &c, const std::vector<RenderItem> &items, const btTransform &frame,
                 Mode mode, const float *override_rgba) {
   for (const RenderItem &it : items) {
+    if (culled(c, it, frame)) continue;
     if (mode == COLOR) {
       const float *col = override_rgba ? override_rgba : it.rgba;
       glColor4f(col[0], col[1], col[2], 1.0f);
@@ -408,7 +457,10 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
                         int height, int oh, int link, double min_z, double *out_fraction, int *occ,
                         int cap) {
   struct ClipScope {  // the clip ends with the call, also when it fails
-    ~ClipScope() { g_clip = ClipBelow(); }
+    ~ClipScope() {
+      g_clip = ClipBelow();
+      g_cull.on = false;
+    }
   } clip_scope;
   return guard([&] {
     World &w = world(wh);
@@ -435,28 +487,56 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
       decode_seg(px, ob, l);
       return ob == oh && (link < 0 || l == link);
     };
-    // 1. the whole scene
-    begin_frame(SEG);
-    setup_camera(cam);
-    draw_world(c, w, SEG, -1, -1);
-    glFinish();
-    std::vector<unsigned char> scene(c.buf.begin(), c.buf.begin() + N * 4);
-    size_t visible = 0;
-    for (size_t i = 0; i < N; ++i) visible += is_target(&scene[4 * i]);
-    // 2. the target alone from the same camera: occluders cover its pixels
+    // 1. the target alone from the real camera: its pixels and their rectangle
     begin_frame(SEG);
     setup_camera(cam);
     draw_world(c, w, SEG, oh, link);
     glFinish();
-    std::set<int> occluders;
+    std::vector<unsigned char> alone(c.buf.begin(), c.buf.begin() + N * 4);
     size_t in_view = 0;
-    for (size_t i = 0; i < N; ++i)
-      if (is_target(&c.buf[4 * i])) {
-        ++in_view;
-        int ob, l;
-        decode_seg(&scene[4 * i], ob, l);
-        if (ob >= 0 && ob != oh) occluders.insert(ob);
-      }
+    int x0 = width, y0 = height, x1 = -1, y1 = -1;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        if (is_target(&alone[4 * ((size_t)y * width + x)])) {
+          ++in_view;
+          x0 = std::min(x0, x); x1 = std::max(x1, x);
+          y0 = std::min(y0, y); y1 = std::max(y1, y);
+        }
+    // 2. the whole scene, drawn only where the target is: occluders cover its pixels
+    size_t visible = 0;
+    std::set<int> occluders;
+    if (in_view > 0) {
+      begin_frame(SEG);
+      setup_camera(cam);
+      glEnable(GL_SCISSOR_TEST);
+      glScissor(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+      g_cull.on = true;
+      g_cull.view = gl_camera(cam).inverse();
+      g_cull.near_m = cam.near_m;
+      g_cull.top = cam.near_m * std::tan(cam.fov * M_PI / 360.0);
+      g_cull.right = g_cull.top * cam.w / cam.h;
+      g_cull.w = cam.w;
+      g_cull.h = cam.h;
+      g_cull.x0 = x0; g_cull.y0 = y0; g_cull.x1 = x1; g_cull.y1 = y1;
+      draw_world(c, w, SEG, -1, -1);
+      g_cull.on = false;
+      glDisable(GL_SCISSOR_TEST);
+      glFinish();
+      for (size_t i = 0; i < N; ++i)
+        if (is_target(&alone[4 * i])) {
+          if (is_target(&c.buf[4 * i])) {
+            ++visible;
+          } else {
+            int ob, l;
+            decode_seg(&c.buf[4 * i], ob, l);
+            if (ob >= 0 && ob != oh) occluders.insert(ob);
+          }
+        }
+    }
+    if (in_view == 0) {  // not in the picture at all: nothing of it is visible
+      *out_fraction = 0.0;
+      return 0;
+    }
     // 3. the target alone with the camera turned towards it
     btVector3 lo, hi;
     bool any = union_aabb(o, link, lo, hi);
