@@ -14,12 +14,8 @@
 (defun repo-file (path) (asdf:system-relative-pathname "cram-plans/roslisp-utilities" path))
 
 (defun free-port ()
-  "A TCP port on 127.0.0.1 that nothing listens on right now."
-  (let ((s (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
-    (unwind-protect
-         (progn (sb-bsd-sockets:socket-bind s #(127 0 0 1) 0)
-                (nth-value 1 (sb-bsd-sockets:socket-name s)))
-      (sb-bsd-sockets:socket-close s))))
+  "A TCP port of 127.0.0.1 that nothing listens on now."
+  (roslisp-utilities:free-local-port))
 
 (defmacro with-env ((&rest bindings) &body body)
   "Run BODY with the environment variables of BINDINGS ((name value-or-nil) ...) set (NIL:

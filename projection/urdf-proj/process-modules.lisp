@@ -2,34 +2,53 @@
 
 (in-package :cram-urdf-projection)
 
-(defun execute-command (module designator allowed)
-  "Run the grounded command of the motion DESIGNATOR with the low-level function of the same
-name, when its command is one of ALLOWED (common-desig command symbols)."
+(defun dispatch-motion (command arguments &key drive move-torso look-at detect gripper-action
+                                                move-tcp move-joints position-arms
+                                                monitor-joint-state)
+  "Call the function given for the grounded motion COMMAND (a common-desig command symbol)
+with the motion's ARGUMENTS: MOVE-TCP gets (left right &key collision-mode move-base
+fixed-torso), MONITOR-JOINT-STATE (joint threshold function), the others the arguments as
+they are. Shared by the process modules of the simulated and of the real robot."
+  (ecase command
+    (common-desig:drive (apply drive arguments))
+    (common-desig:move-torso (apply move-torso arguments))
+    (common-desig:look-at (apply look-at arguments))
+    (common-desig:detect (apply detect arguments))
+    (common-desig:move-gripper-joint (apply gripper-action arguments))
+    (common-desig:move-tcp
+     (destructuring-bind (left right mode move-base fixed-torso) arguments
+       (funcall move-tcp left right :collision-mode mode :move-base move-base :fixed-torso fixed-torso)))
+    (common-desig:move-joints (apply move-joints arguments))
+    (common-desig:position-arms (apply position-arms arguments))
+    (common-desig:monitor-joint-state (apply monitor-joint-state arguments))))
+
+(defun grounded-command (module designator allowed)
+  "(values command arguments) of the motion DESIGNATOR's grounding, when its command is one of
+ALLOWED; an error naming MODULE and the motion otherwise."
   (let* ((grounding (desig:reference designator))
-         (command (common-desig:motion-command grounding))
-         (arguments (common-desig:motion-arguments grounding)))
+         (command (common-desig:motion-command grounding)))
     (unless (member command allowed)
       (error "Process module ~s cannot execute the motion ~s (command ~s; it executes ~s)."
              module designator command allowed))
-    (ecase command
-      (common-desig:drive (apply #'drive arguments))
-      (common-desig:move-torso (apply #'move-torso arguments))
-      (common-desig:look-at (apply #'look-at arguments))
-      (common-desig:detect (apply #'detect arguments))
-      (common-desig:move-gripper-joint (apply #'gripper-action arguments))
-      (common-desig:move-tcp
-       (destructuring-bind (left right mode move-base fixed-torso) arguments
-         (move-tcp left right :collision-mode mode :move-base move-base :fixed-torso fixed-torso)))
-      (common-desig:move-joints (apply #'move-joints arguments))
-      (common-desig:position-arms (apply #'position-arms arguments))
-      (common-desig:monitor-joint-state
-       (destructuring-bind (joint threshold function) arguments
-         (declare (ignore function))
-         (unless (movable-joint-p (robot-object) joint)
-           (projection-error "MONITOR-JOINT-STATE: ~s is not a movable joint of the robot." joint))
-         (unless (realp threshold)
-           (projection-error "MONITOR-JOINT-STATE: threshold ~s, expected a real." threshold))
-         (btr:joint-state (robot-object) joint))))))
+    (values command (common-desig:motion-arguments grounding))))
+
+(defun execute-command (module designator allowed)
+  "Run the grounded command of the motion DESIGNATOR with the low-level function of the same
+name, when its command is one of ALLOWED (common-desig command symbols)."
+  (multiple-value-bind (command arguments) (grounded-command module designator allowed)
+    (dispatch-motion
+     command arguments
+     :drive #'drive :move-torso #'move-torso :look-at #'look-at :detect #'detect
+     :gripper-action #'gripper-action :move-tcp #'move-tcp :move-joints #'move-joints
+     :position-arms #'position-arms
+     :monitor-joint-state
+     (lambda (joint threshold function)
+       (declare (ignore function))
+       (unless (movable-joint-p (robot-object) joint)
+         (projection-error "MONITOR-JOINT-STATE: ~s is not a movable joint of the robot." joint))
+       (unless (realp threshold)
+         (projection-error "MONITOR-JOINT-STATE: threshold ~s, expected a real." threshold))
+       (btr:joint-state (robot-object) joint)))))
 
 (cpm:def-process-module urdf-proj-navigation (motion-designator)
   "Executes GOING motions of the simulated robot (DRIVE)."

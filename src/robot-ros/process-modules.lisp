@@ -13,30 +13,19 @@
 ALLOWED (common-desig command symbols)."
   (unless (and *real-robot-active* *connection*)
     (error "Process module ~s runs only inside WITH-REAL-ROBOT." module))
-  (let* ((grounding (desig:reference designator))
-         (command (common-desig:motion-command grounding))
-         (arguments (common-desig:motion-arguments grounding)))
-    (unless (member command allowed)
-      (error "Process module ~s cannot execute the motion ~s (command ~s; it executes ~s)."
-             module designator command allowed))
+  (multiple-value-bind (command arguments) (urdf-proj::grounded-command module designator allowed)
     (check-master *connection*)
     (unwind-protect
-         (ecase command
-           (common-desig:drive (apply #'drive arguments))
-           (common-desig:move-torso (apply #'move-torso arguments))
-           (common-desig:look-at (apply #'look-at arguments))
-           (common-desig:detect (apply #'detect arguments))
-           (common-desig:move-gripper-joint (apply #'gripper-action arguments))
-           (common-desig:move-tcp
-            (destructuring-bind (left right mode move-base fixed-torso) arguments
-              (move-tcp left right :collision-mode mode :move-base move-base :fixed-torso fixed-torso)))
-           (common-desig:move-joints (apply #'move-joints arguments))
-           (common-desig:position-arms (apply #'position-arms arguments))
-           (common-desig:monitor-joint-state
-            (destructuring-bind (joint threshold function) arguments
-              (declare (ignore threshold function))
-              (or (gethash joint (robot-joint-positions))
-                  (error "MONITOR-JOINT-STATE: ~s is not in /joint_states." joint)))))
+         (urdf-proj::dispatch-motion
+          command arguments
+          :drive #'drive :move-torso #'move-torso :look-at #'look-at :detect #'detect
+          :gripper-action #'gripper-action :move-tcp #'move-tcp :move-joints #'move-joints
+          :position-arms #'position-arms
+          :monitor-joint-state
+          (lambda (joint threshold function)
+            (declare (ignore threshold function))
+            (or (gethash joint (robot-joint-positions))
+                (error "MONITOR-JOINT-STATE: ~s is not in /joint_states." joint))))
       (ignore-errors (urdf-proj::after-motion (string-downcase (symbol-name command)))))))
 
 (cpm:def-process-module ros-navigation (motion-designator)

@@ -15,11 +15,7 @@
 
 (defun free-port ()
   "A TCP port of 127.0.0.1 that nothing listens on now."
-  (let ((s (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
-    (unwind-protect
-         (progn (sb-bsd-sockets:socket-bind s #(127 0 0 1) 0)
-                (nth-value 1 (sb-bsd-sockets:socket-name s)))
-      (sb-bsd-sockets:socket-close s))))
+  (roslisp-utilities:free-local-port))
 
 (defun start-group (ros name program &rest args)
   "Start PROGRAM with ARGS (SBCL makes it a process group leader), output to NAME.log in ROS's dir."

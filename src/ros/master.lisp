@@ -128,3 +128,11 @@ malformed MASTER-URI or TIMEOUT is an error. Needs no roslisp."
     (ros-fail "ROS-AVAILABLE-P: timeout ~s, expected a positive number of seconds" timeout))
   (multiple-value-bind (host port) (parse-master-uri (ros-master-uri master-uri))
     (eql 1 (call-with-timeout timeout (lambda () (master-get-pid-code host port))))))
+
+(defun free-local-port ()
+  "A TCP port of 127.0.0.1 that nothing listens on now (for a private master or node)."
+  (let ((s (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
+    (unwind-protect
+         (progn (sb-bsd-sockets:socket-bind s #(127 0 0 1) 0)
+                (nth-value 1 (sb-bsd-sockets:socket-name s)))
+      (sb-bsd-sockets:socket-close s))))

@@ -8,7 +8,7 @@
    ;; ROS_HOME
    #:ros-home-directory #:ensure-ros-home
    ;; the master
-   #:ros-master-uri #:ros-available-p #:ros-master-unreachable
+   #:ros-master-uri #:ros-available-p #:ros-master-unreachable #:free-local-port
    #:ros-master-unreachable-uri #:ros-master-unreachable-source
    #:ros-utilities-error
    ;; node life cycle
