@@ -57,7 +57,9 @@ lisp: native
 	$(SBCL) --eval '(asdf:load-system "cram-plans")' \
 	        --eval '(asdf:load-system "cram-plans/tests")'
 
+# ... and the saved SBCL core that tools/cram-plans-run and its campaign workers start from
 build: lisp
+	tools/cram-plans-run --build-core
 
 # Inside the README test (tests/readme-tests.lisp, which runs the README's `make test` block
 # while this target's suites run it), only build.

@@ -154,3 +154,91 @@ makes a worker kill itself with SIGKILL before a run; exit code, output and erro
                    "the Lisp heap after a full GC grew from ~,1f MB to ~,1f MB over 40 runs"
                    (first heaps) (third heaps)))))
       (when (probe-file path) (delete-file path)))))
+
+;;; ---- the saved core (tools/cram-plans-core) ----------------------------------------------------
+
+(defun line-without-seconds (line)
+  "LINE, a run's JSON line, without its \"seconds\" field (the only wall-clock value)."
+  (let* ((start (search "\"seconds\":" line))
+         (end (and start (position #\, line :start start))))
+    (if end (concatenate 'string (subseq line 0 start) (subseq line (1+ end))) line)))
+
+(defun file-lines (path)
+  (with-open-file (s path) (loop for l = (read-line s nil) while l collect l)))
+
+(defun core-script (&rest args)
+  "Run tools/cram-plans-core with ARGS (each \"NAME=VALUE\" one sets the environment); its exit
+code, standard output (trimmed) and error output."
+  (let ((script (asdf:system-relative-pathname "cram-plans" "tools/cram-plans-core")))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (append (list "env") (remove-if-not (lambda (a) (find #\= a)) args)
+                                  (list (namestring script)) (remove-if (lambda (a) (find #\= a)) args))
+                          :output :string :error-output :string :ignore-error-status t)
+      (values code (string-trim '(#\Space #\Newline) out) err))))
+
+(test saved-core-gives-the-runs-of-loaded-workers
+  ;; the tool and its workers start from a saved core; the same campaign from workers that load
+  ;; the systems (the fallback when the core cannot be built) gives byte-identical JSON lines
+  (let ((cored (temp-file "cored.jsonl")) (loaded (temp-file "loaded.jsonl")))
+    (unwind-protect
+         (multiple-value-bind (code core) (core-script)
+           (is (eql 0 code))
+           (is (and (plusp (length core)) (probe-file core)) "tools/cram-plans-core builds the core: ~s" core)
+           (multiple-value-bind (out err code)
+               (uiop:run-program (list "sbcl" "--core" core "--noinform" "--non-interactive"
+                                       "--no-userinit" "--no-sysinit" "--eval"
+                                       "(progn (prin1 (list cram-plans-demo::*saved-core-p*
+                                                            (cram-native:native-version) ; reopened .so
+                                                            (cram-native:world-count)
+                                                            (cram-native:world-alive-p
+                                                             (btr:world-handle btr:*current-bullet-world*))
+                                                            (namestring (uiop:temporary-directory))))
+                                               (terpri))")
+                                 :output :string :error-output :string :ignore-error-status t)
+             (declare (ignore err))
+             (is (eql 0 code))
+             (let ((state (ignore-errors (read-from-string out))))
+               (is (eq t (first state)) "the core knows it is one: ~s" out)
+               (is (integerp (second state)) "libcram_native.so answers in the core: ~s" out)
+               (is (eql 1 (third state)) "one native world, the fresh belief state: ~s" out)
+               (is (eq t (fourth state)) "the belief state is a live world: ~s" out)))
+           (is (eql 0 (run-cli "--batch" "5" "--seed" "13" "--jobs" "2" "--results" cored)))
+           (multiple-value-bind (code out err)
+               (run-cli-env "CRAM_PLANS_CORE_DIR=/dev/null/no-core" "--batch" "5" "--seed" "13"
+                            "--jobs" "2" "--results" loaded)
+             (declare (ignore out))
+             (is (eql 0 code) "~a" err)
+             (is (search "warning: cannot create /dev/null/no-core; loading the systems instead" err)
+                 "without a core the tool says so in one line and loads the systems"))
+           (let ((a (mapcar #'line-without-seconds (file-lines cored)))
+                 (b (mapcar #'line-without-seconds (file-lines loaded))))
+             (is (= 5 (length a)))
+             (is (equal a b) "the core's runs equal the loaded workers' runs byte for byte")))
+      (dolist (f (list cored loaded)) (when (probe-file f) (delete-file f))))))
+
+(test saved-core-builds-race-safely
+  ;; two processes building the same core at once: both get it, no temporary file is left
+  (let ((dir (uiop:ensure-directory-pathname (temp-file "cores"))))
+    (unwind-protect
+         (let* ((script (namestring (asdf:system-relative-pathname "cram-plans" "tools/cram-plans-core")))
+                (env (format nil "CRAM_PLANS_CORE_DIR=~a" (string-right-trim "/" (namestring dir))))
+                (processes (loop repeat 2
+                                 collect (uiop:launch-program (list "env" env script)
+                                                              :output :stream :error-output nil)))
+                (paths (mapcar (lambda (p)
+                                 (prog1 (string-trim '(#\Space #\Newline)
+                                                     (uiop:slurp-stream-string (uiop:process-info-output p)))
+                                   (uiop:wait-process p)))
+                               processes)))
+           (is (equal (first paths) (second paths)) "both builders name the same core: ~s" paths)
+           (is (and (plusp (length (first paths))) (probe-file (first paths))))
+           (is (equal (list (first paths))
+                      (mapcar #'namestring (directory (merge-pathnames "*.core" dir)))))
+           (is (null (directory (merge-pathnames "*.tmp-*" dir))) "no temporary core is left")
+           (multiple-value-bind (code key) (core-script "--key")
+             (is (eql 0 code))
+             (is (search key (first paths)) "the core is named by the key of its inputs"))
+           (multiple-value-bind (code key) (core-script "CL_SOURCE_REGISTRY=/nonexistent//:" "--key")
+             (declare (ignore code))
+             (is (not (search key (first paths))) "another input gives another key")))
+      (uiop:delete-directory-tree dir :validate t :if-does-not-exist :ignore))))

@@ -6,7 +6,9 @@
 (let ((root (merge-pathnames "../" (make-pathname :name nil :type nil
                                                    :defaults (or *load-truename* *default-pathname-defaults*)))))
   (handler-bind ((warning #'muffle-warning))
-    (asdf:load-asd (merge-pathnames "cram-plans.asd" root))
+    ;; the truename (no "tools/../"): the pathname ASDF's source registry finds, so that later
+    ;; lookups (ASDF:SYSTEM-RELATIVE-PATHNAME ...) do not load cram-plans.asd again
+    (asdf:load-asd (truename (merge-pathnames "cram-plans.asd" root)))
     (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
     (asdf:load-system "cram-plans/cram-pepper-demo")
     (asdf:load-system "cram-plans/replay")   ; runs recorded; --out writes replay.html
@@ -34,21 +36,89 @@
                               (cl-transforms:origin btw-tut:*final-object-destination*))
         most-positive-double-float)))
 
+(defun count-occurrences (needle text)
+  "How many times NEEDLE occurs in TEXT (strings), overlapping occurrences included."
+  (let ((needle (coerce needle '(simple-array character (*))))
+        (text (coerce text '(simple-array character (*)))))
+    (declare (type (simple-array character (*)) needle text) (optimize speed))
+    (let ((m (length needle)) (n (length text)))
+      (if (zerop m)
+          (1+ n)
+          (let ((first (schar needle 0)))
+            (loop for i of-type fixnum from 0 to (- n m)
+                  count (and (char= first (schar text i))
+                             (loop for j of-type fixnum from 1 below m
+                                   always (char= (schar needle j) (schar text (+ i j)))))))))))
+
 (defun parse-log (text)
   "Counts of the recoveries and failures a move-bottle log shows."
-  (flet ((count-of (needle)
-           (loop with start = 0 for pos = (search needle text :start2 start)
-                 while pos count t do (setf start (1+ pos)))))
+  (flet ((count-of (needle) (count-occurrences needle text)))
     (list :look-direction (count-of "Turning head.")
           :new-grasp (count-of "Trying to grasp from")
           :new-arm (count-of "Trying the ")
           :grasp-failure (count-of "[(GRASP-FAILURE) WARN]")
           :perception-failure (count-of "[(PERCEPTION-FAILURE) WARN]"))))
 
-(defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*))
-  "Run move-bottle with the bottle at POSE in a fresh belief state. Returns a plist: :success,
-:distance, :seconds, :error, the recovery counts of the log, and :log."
-  (btw-tut:init-projection)
+(defvar *pristine-world* nil
+  "RESET-PROJECTION's copy of the belief state BTW-TUT:INIT-PROJECTION made in this process
+(never the current world).")
+(defvar *pristine-settings* '()
+  "The settings BTW-TUT:INIT-PROJECTION made with *PRISTINE-WORLD*, a plist.")
+
+(defvar *preparsed-urdfs* '()
+  "(text . robot) pairs: URDF texts and what CL-URDF:PARSE-URDF made of them when the saved
+core was built (SAVE-CORE in tools/build-core.lisp); empty in a process that loaded the systems.")
+
+(defun call-with-preparsed-urdfs (thunk)
+  "Call THUNK; meanwhile CL-URDF:PARSE-URDF of a text in *PREPARSED-URDFS* returns its parse
+from the saved core (the same text gives the same robot) instead of parsing it again."
+  (if (null *preparsed-urdfs*)
+      (funcall thunk)
+      (progn
+        (sb-int:encapsulate 'cl-urdf:parse-urdf 'preparsed
+                            (lambda (parse &rest args)
+                              (or (and (= 1 (length args)) (stringp (first args))
+                                       (cdr (assoc (first args) *preparsed-urdfs* :test #'string=)))
+                                  (apply parse args))))
+        (unwind-protect (funcall thunk)
+          (sb-int:unencapsulate 'cl-urdf:parse-urdf 'preparsed)))))
+
+(defun reset-projection ()
+  "BTW-TUT:INIT-PROJECTION for many runs in one process (a campaign worker): the first call runs
+it and keeps a copy of its world; every call makes a new copy of that copy the current world,
+destroys the previous one, and restores the settings INIT-PROJECTION made (a copy costs about a
+fifth of a rebuild). Every run starts from the same copy, so a run's result does not depend on
+which runs this process made before it."
+  (let ((pristine *pristine-world*))
+    (cond ((and pristine (cram-native:world-alive-p (btr:world-handle pristine)))
+           (coe:clear-belief)
+           (destructuring-bind (&key robot-name robot-urdf environment base-frame) *pristine-settings*
+             (setf rob-int:*robot-name* robot-name
+                   rob-int:*robot-urdf* robot-urdf
+                   btr:*environment-name* environment
+                   cram-tf:*robot-base-frame* base-frame)))
+          (t
+           (call-with-preparsed-urdfs #'btw-tut:init-projection)
+           (setf pristine (btr:copy-world btr:*current-bullet-world*)
+                 *pristine-world* pristine
+                 *pristine-settings* (list :robot-name rob-int:*robot-name*
+                                           :robot-urdf rob-int:*robot-urdf*
+                                           :environment btr:*environment-name*
+                                           :base-frame cram-tf:*robot-base-frame*))))
+    (let ((old btr:*current-bullet-world*))
+      (setf btr:*current-bullet-world* (btr:copy-world pristine))
+      (when (and old (not (eq old pristine)) (typep old 'btr:bt-world))
+        (ignore-errors (btr:destroy-world old))))
+    (btr:debug-window btr:*current-bullet-world*)
+    (setf cram-tf:*tf-default-timeout* 2.0
+          prolog:*break-on-lisp-errors* t)
+    btr:*current-bullet-world*))
+
+(defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*) reuse-world)
+  "Run move-bottle with the bottle at POSE in a fresh belief state (with REUSE-WORLD, a copy of
+the one this process made first: see RESET-PROJECTION). Returns a plist: :success, :distance,
+:seconds, :error, the recovery counts of the log, and :log."
+  (if reuse-world (reset-projection) (btw-tut:init-projection))
   (let* ((btr:*snapshot-directory* (and pictures out-dir (namestring out-dir)))
          (captured (make-string-output-stream))
          (stream (make-broadcast-stream captured log-stream))

@@ -27,6 +27,9 @@ Single runs (default: --demo move-bottle, bottle in view):
   --seed N            seed of every random choice (default 1)
   --bottle-pose P     move-bottle's bottle at x,y,z[,yaw] (metres, radians)
   --input TEXT        what the pepper demo reads from the user (default \"2\")
+  --robot ros         run move-bottle over ROS against the simulated robot (private roscore,
+                      launch/sim_robot.launch); success: the bottle at its destination there
+  --speed S           time factor of the simulated robot with --robot ros (default 1)
   --out DIR           write the log's pictures, start/grasped/placed.png and the task tree
   --quiet             no log on standard output
 Batch campaigns of randomized move-bottle runs (one JSON line per run, in index order):
@@ -37,6 +40,9 @@ Batch campaigns of randomized move-bottle runs (one JSON line per run, in index 
   --results FILE      where the JSON lines go (default batch-SEED.jsonl)
   --memory-every K    each worker reports its RSS and Lisp heap every K runs
   --summary FILE...   success rate and histograms of JSON lines files (merged shards)
+The tool and its workers start from a saved SBCL core (${XDG_CACHE_HOME:-~/.cache}/cram-plans/
+cores/), built on first use and whenever a source changes (tools/cram-plans-core);
+cram-plans-run --build-core only builds it; CRAM_PLANS_NO_CORE=1 loads the systems instead.
 Exit status: 0 success, 1 plan failure, 2 bad options.")
 
 (defun parse-integer-option (option value &key (min 0))
@@ -72,6 +78,12 @@ Exit status: 0 success, 1 plan failure, 2 bad options.")
                        ((string= option "--seed") (setf (getf options :seed) (parse-integer-option option (value))))
                        ((string= option "--bottle-pose") (setf (getf options :pose) (parse-pose-option (value))))
                        ((string= option "--input") (setf (getf options :input) (value)))
+                       ((string= option "--robot") (setf (getf options :robot) (value)))
+                       ((string= option "--speed")
+                        (let* ((v (value)) (n (let ((*read-eval* nil)) (ignore-errors (read-from-string v)))))
+                          (unless (and (realp n) (plusp n))
+                            (usage-fail "--speed needs a positive number, got ~s" v))
+                          (setf (getf options :speed) n)))
                        ((string= option "--out") (setf (getf options :out) (value)))
                        ((string= option "--quiet") (setf (getf options :quiet) t))
                        ((string= option "--batch") (setf (getf options :batch) (parse-integer-option option (value) :min 1)))
@@ -124,7 +136,8 @@ any yaw), drawn from SEED."
   (let ((seed (run-seed campaign-seed index)))
     (multiple-value-bind (pose numbers) (random-bottle-pose seed)
       (seed-everything seed)
-      (let ((result (run-move-bottle pose :pictures nil :log-stream (make-broadcast-stream)))
+      (let ((result (run-move-bottle pose :pictures nil :log-stream (make-broadcast-stream)
+                                                   :reuse-world t))
             (record (make-hash-table :test 'equal)))
         (setf (gethash "index" record) index
               (gethash "seed" record) seed
@@ -205,7 +218,9 @@ worker that reaches it. A line on standard output announces it."
                &key (slot 0) (generation 0) memory-every memory-file)
   "The body of one worker process: run the campaign runs listed in INDICES-FILE in order,
 appending one JSON line per run to RESULTS-FILE (a run that signals outside the plan is
-recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0."
+recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0.
+Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECORD-RUNS*)."
+  (setf cram-viewer:*record-runs* nil)
   (with-open-file (out results-file :direction :output :if-exists :append :if-does-not-exist :create)
     (loop for i in (read-indices indices-file)
           for done from 1
@@ -280,6 +295,19 @@ of them (a line still being written is left for the next call)."
                                             (11 . "SIGSEGV") (15 . "SIGTERM"))))))
       (t (format nil "ended (~(~a~) ~a)" (sb-ext:process-status process) code)))))
 
+(defvar *saved-core-p* nil
+  "True in the saved core that tools/cram-plans-core builds (SAVE-CORE in tools/build-core.lisp
+sets it): the workers of a campaign then start from that core instead of loading the systems.")
+
+(defun worker-image-options (demo)
+  "The SBCL options that give a worker its image: this process's saved core when the tool runs
+from one and the file is still there, else loading DEMO (tools/demo.lisp) as before."
+  (let ((core (and *saved-core-p* sb-ext:*core-pathname* (probe-file sb-ext:*core-pathname*))))
+    (if core
+        (list "--core" (namestring core) "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit")
+        (list "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
+              "--eval" "(require :asdf)" "--load" demo))))
+
 (defun launch-worker (slot indices seed tmp memory-every)
   "Start the next process of SLOT on the run INDICES, its files in the directory TMP."
   (let ((base (format nil "worker-~d-~d" (slot-id slot) (slot-generation slot)))
@@ -292,12 +320,11 @@ of them (a line still being written is left for the next call)."
             (slot-results-offset slot) 0 (slot-memory-offset slot) 0
             (slot-process slot)
             (sb-ext:run-program
-             "sbcl" (list "--noinform" "--non-interactive" "--no-userinit" "--no-sysinit"
-                          "--eval" "(require :asdf)" "--load" demo
-                          "--eval" (format nil "(cram-plans-demo::worker ~d ~s ~s :slot ~d :generation ~d ~
-                                                :memory-every ~s :memory-file ~s)"
-                                           seed (file "indices") (file "jsonl") (slot-id slot)
-                                           (slot-generation slot) memory-every (file "memory")))
+             "sbcl" (append (worker-image-options demo)
+                            (list "--eval" (format nil "(cram-plans-demo::worker ~d ~s ~s :slot ~d :generation ~d ~
+                                                        :memory-every ~s :memory-file ~s)"
+                                                   seed (file "indices") (file "jsonl") (slot-id slot)
+                                                   (slot-generation slot) memory-every (file "memory"))))
              :search t :wait nil :input nil :output (file "log") :if-output-exists :supersede
              :error :output :environment (worker-environment))))))
 
@@ -306,6 +333,10 @@ of them (a line still being written is left for the next call)."
 nobody to show it to) unless CRAM_PLANS_VIEWER is set."
   (let ((env (sb-ext:posix-environ)))
     (if (uiop:getenv "CRAM_PLANS_VIEWER") env (cons "CRAM_PLANS_VIEWER=0" env))))
+
+(defparameter *poll-interval* 0.05
+  "Seconds between two looks of the campaign supervisor at its workers' files and processes
+(reading a few appended lines costs microseconds; a long interval delays the end of a campaign).")
 
 (defvar *max-stalls* 4
   "A campaign stops with an error when the processes of one worker slot die this many times in a
@@ -414,7 +445,7 @@ generation, runs, rss_mb, heap_mb) and the deaths (plists)."
                       (unless (= shown percent) ; at most 100 redraws, also in a log file
                         (setf shown percent)
                         (progress-bar (hash-table-count lines) (length indices) stream)))
-                    (sleep 0.3))
+                    (sleep *poll-interval*))
            (progress-bar (hash-table-count lines) (length indices) stream)
            (terpri stream))
       (dolist (slot slots)
@@ -537,6 +568,9 @@ success rate."
                              (format t "~&results: ~a~%" path)
                              (summarize (read-json-lines (list path)))
                              0))
+                          ((getf options :robot)   ; tools/robot-run.lisp, loaded on demand
+                           (load (merge-pathnames "robot-run.lisp" *tools-directory*))
+                           (if (uiop:symbol-call :cram-plans-demo :run-robot-demo options) 0 1))
                           (t (if (run-demo options) 0 1))))
                 (usage-error (e) (format *error-output* "~&cram-plans-run: ~a~%" e) 2))))
     (finish-output)
