@@ -24,6 +24,12 @@
   "URDF text (a Lisp string) → (length . its UTF-8 copy in foreign memory), freed with it: a
 belief state built again from the same URDF does not encode the text again.")
 
+;; foreign memory does not survive SAVE-LISP-AND-DIE: a saved core starts without copies
+(pushnew 'clear-urdf-foreign-strings sb-ext:*save-hooks*)
+(defun clear-urdf-foreign-strings ()
+  "Forget the foreign copies of URDF texts (before the image is saved)."
+  (clrhash *urdf-foreign-strings*))
+
 (defun urdf-foreign-string (string)
   "The foreign UTF-8 copy of STRING, made once per string object (and again if its length
 changed)."

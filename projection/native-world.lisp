@@ -140,7 +140,10 @@ written into OUT (a DVEC of 7) when given."
 (defun set-object-pose (world object pose)
   "Teleport OBJECT to POSE (7 numbers, or ((x y z) (qx qy qz qw))); wakes it up and moves
 the objects rigidly attached to it."
-  (let ((v (pose-vec pose 'set-object-pose)))
+  (let ((v (if (and (typep pose 'dvec) (= (length pose) 7))
+               pose                     ; the common case, without a call of POSE-VEC
+               (pose-vec pose 'set-object-pose))))
+    (declare (type dvec v))
     (with-vector-pointers ((p v)) (ccall "cn_object_set_pose" world object p))
     pose))
 

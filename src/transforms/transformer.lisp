@@ -49,7 +49,12 @@ TRANSFORM from the parent to it, STATIC when set as such."
    (waiters :initform 0 :type fixnum :accessor transformer-waiters
             :documentation "How many lookups wait for a change.")
    (frames :initform (make-hash-table :test 'equal) :reader transformer-frames
-           :documentation "Frame name -> TF-FRAME, for every frame seen as parent or child."))
+           :documentation "Frame name -> TF-FRAME, for every frame seen as parent or child.")
+   (name-cache :initform (make-array 16 :initial-element 0) :reader transformer-name-cache
+               :type simple-vector
+               :documentation "Pairs (name . TF-FRAME) of recently used frames whose name is
+the very string object of the frame's key in FRAMES, found by EQ without hashing the name.")
+   (name-cache-next :initform 0 :type fixnum :accessor transformer-name-cache-next))
   (:documentation "A buffer of TRANSFORM-STAMPEDs forming a frame tree (each frame has at most one
 parent). SET-TRANSFORM adds or replaces the transform of a child frame; LOOKUP-TRANSFORM,
 TRANSFORM-POSE-STAMPED and TRANSFORM-POINT-STAMPED answer with the latest data along the path
@@ -64,12 +69,39 @@ between two frames. Safe to update from one thread while others query."))
   (unless (typep transformer 'transformer)
     (cl-transforms::input-error transformer "a CL-TF:TRANSFORMER" place)))
 
-(defun %frame-name (frame place)
+(defun %frame-name-slow (frame place)
   "FRAME as a normalised, non-empty frame name."
   (let ((name (normalize-frame-name frame place)))
     (when (zerop (length name))
       (cl-transforms::input-error frame "a non-empty frame name" place))
     name))
+
+(declaim (inline %frame-name))
+(defun %frame-name (frame place)
+  "FRAME as a normalised, non-empty frame name: FRAME itself when it is a simple string that
+needs no normalisation (the common case), otherwise as NORMALIZE-FRAME-NAME makes it."
+  (if (and (simple-string-p frame) (plusp (length frame)) (char/= (schar frame 0) #\/))
+      frame
+      (%frame-name-slow frame place)))
+
+(defmacro %with-transformer-lock ((transformer) &body body)
+  "Run BODY holding the lock of TRANSFORMER; returns its values. Uncontended, the lock is taken
+with interrupts deferred around BODY (which must be short and must not wait or signal): that
+costs a third of WITH-RECURSIVE-LOCK. A thread that already holds the lock (inside
+WITH-TRANSFORMS-BATCH) runs BODY directly; a contended lock is waited for as
+WITH-RECURSIVE-LOCK does."
+  (let ((lock (gensym "LOCK")) (fn (gensym "BODY")))
+    `(let ((,lock (transformer-lock ,transformer)))
+       (flet ((,fn () ,@body))
+         (declare (dynamic-extent #',fn))
+         (if (sb-thread:holding-mutex-p ,lock)
+             (,fn)
+             (block locked
+               (sb-sys:without-interrupts
+                 (when (sb-thread:grab-mutex ,lock :waitp nil)
+                   (return-from locked
+                     (unwind-protect (,fn) (sb-thread:release-mutex ,lock)))))
+               (sb-thread:with-recursive-lock (,lock) (,fn))))))))
 
 (defun %timeout (timeout place)
   "TIMEOUT in seconds as a non-negative double float; NIL means 0."
@@ -79,10 +111,33 @@ between two frames. Safe to update from one thread while others query."))
         d)
       0d0))
 
-(defun %intern-frame (frames name)
-  "The TF-FRAME called NAME in the table FRAMES, created when new."
-  (or (gethash name frames)
-      (setf (gethash name frames) (make-tf-frame name))))
+(defun %find-frame (transformer name)
+  "Under the lock: the TF-FRAME of TRANSFORMER called NAME (a normalised frame name), or NIL.
+A NAME that is the string object of a frame's own name (its key) is found by EQ in a small
+cache, without hashing; the other names through the table."
+  (declare (optimize (speed 3) (safety 0)))
+  (let ((cache (transformer-name-cache transformer)))
+    (declare (type (simple-vector 16) cache))
+    (loop for i of-type fixnum from 0 below 16 by 2
+          when (eq (svref cache i) name)
+            do (return-from %find-frame (svref cache (1+ i))))
+    (let ((frame (gethash name (transformer-frames transformer))))
+      (when (and frame (eq (tf-frame-name frame) name))
+        (let ((i (transformer-name-cache-next transformer)))
+          (declare (type fixnum i))
+          (setf (svref cache (1+ i)) frame
+                (svref cache i) name
+                (transformer-name-cache-next transformer) (logand (+ i 2) 15))))
+      frame)))
+
+(defun %flush-name-cache (transformer)
+  "Under the lock: forget every cached frame (after frames were removed)."
+  (fill (transformer-name-cache transformer) 0))
+
+(defun %intern-frame (transformer name)
+  "The TF-FRAME of TRANSFORMER called NAME, created when new."
+  (or (%find-frame transformer name)
+      (setf (gethash name (transformer-frames transformer)) (make-tf-frame name))))
 
 (defun set-transform (transformer transform &key static (authority "default_authority"))
   "Store TRANSFORM (a TRANSFORM-STAMPED from its FRAME-ID to its CHILD-FRAME-ID) as the latest
@@ -95,27 +150,29 @@ the frame tree signals TF-CONNECTIVITY-ERROR. Returns TRANSFORM."
     (cl-transforms::input-error transform "a TRANSFORM-STAMPED" 'set-transform))
   (let ((parent-name (%frame-name (%ts-frame-id transform) 'set-transform))
         (child-name (%frame-name (%ts-child-frame-id transform) 'set-transform))
-        (frames (transformer-frames transformer)))
-    (when (string= parent-name child-name)
+        (static (and static t)))
+    (declare (type simple-string parent-name child-name))
+    (when (and (= (length parent-name) (length child-name)) (string= parent-name child-name))
       (cl-transforms::input-error transform "a transform between two different frames"
                                   'set-transform))
-    (sb-thread:with-recursive-lock ((transformer-lock transformer))
-      (let ((parent (%intern-frame frames parent-name))
-            (child (%intern-frame frames child-name)))
-        ;; the new link must not make CHILD an ancestor of itself
-        (loop for frame = parent then (tf-frame-parent frame)
-              while frame
-              when (eq frame child)
-                do (error 'tf-connectivity-error
-                          :target-frame parent-name :source-frame child-name
-                          :description (format nil "setting ~s as the parent of ~s would close ~
-                                                    a loop in the frame tree"
-                                               parent-name child-name)))
-        (setf (tf-frame-parent child) parent
-              (tf-frame-transform child) transform
-              (tf-frame-static child) (and static t)))
-      (when (plusp (transformer-waiters transformer))
-        (sb-thread:condition-broadcast (transformer-changed transformer))))
+    (unless (%with-transformer-lock (transformer)
+              (let ((parent (%intern-frame transformer parent-name))
+                    (child (%intern-frame transformer child-name)))
+                ;; the new link must not make CHILD an ancestor of itself
+                (when (loop for frame = parent then (tf-frame-parent frame)
+                            while frame
+                            never (eq frame child))
+                  (setf (tf-frame-parent child) parent
+                        (tf-frame-transform child) transform
+                        (tf-frame-static child) static)
+                  (when (plusp (transformer-waiters transformer))
+                    (sb-thread:condition-broadcast (transformer-changed transformer)))
+                  t)))
+      (error 'tf-connectivity-error
+             :target-frame parent-name :source-frame child-name
+             :description (format nil "setting ~s as the parent of ~s would close ~
+                                       a loop in the frame tree"
+                                  parent-name child-name)))
     transform))
 
 (declaim (inline %depth))
@@ -128,95 +185,171 @@ the frame tree signals TF-CONNECTIVITY-ERROR. Returns TRANSFORM."
           while f do (incf n))
     n))
 
-(defun %solve (source target)
-  "The transform mapping points of the TF-FRAME SOURCE into the TF-FRAME TARGET, composed along
-the tree path through their nearest common ancestor, as a TRANSFORM and the oldest stamp of the
-non-static links used (0 when there are none); NIL when the frames lie in different trees."
-  (declare (type tf-frame source target)
+;;; A lookup writes its result into a scratch buffer of double floats on the caller's stack: the
+;;; translation and rotation of the transform (x y z qx qy qz qw) at 0..6 and the stamp at 7;
+;;; 8..15 hold the target side's accumulators while the path is composed.
+
+(deftype %lookup-buffer () '(simple-array double-float (16)))
+
+(defmacro %with-lookup-buffer ((var) &body body)
+  "Bind VAR to a fresh %LOOKUP-BUFFER allocated on the stack around BODY."
+  `(let ((,var (make-array 16 :element-type 'double-float)))
+     (declare (dynamic-extent ,var))
+     ,@body))
+
+(defun %climb (frame steps buffer base)
+  "Compose the links of STEPS frames up from the TF-FRAME FRAME onto the accumulated transform
+at BASE of BUFFER (x y z qx qy qz qw, then the oldest stamp of the non-static links):
+accumulated := link(frame) * accumulated, frame := parent(frame), STEPS times."
+  (declare (type tf-frame frame) (type fixnum steps base) (type %lookup-buffer buffer)
+           (optimize (speed 3) (safety 0) (debug 0)))
+  (let ((x (aref buffer base)) (y (aref buffer (+ base 1))) (z (aref buffer (+ base 2)))
+        (qx (aref buffer (+ base 3))) (qy (aref buffer (+ base 4)))
+        (qz (aref buffer (+ base 5))) (qw (aref buffer (+ base 6)))
+        (stamp (aref buffer (+ base 7))))
+    (declare (type double-float x y z qx qy qz qw stamp))
+    (loop repeat steps
+          do (let ((tr (tf-frame-transform frame)))
+               (cl-transforms::with-transform-components ((ltx lty ltz lqx lqy lqz lqw) tr)
+                 (multiple-value-bind (rx ry rz)
+                     (cl-transforms::%rotate-components lqx lqy lqz lqw x y z)
+                   (setf x (+ rx ltx) y (+ ry lty) z (+ rz ltz)))
+                 (multiple-value-setq (qx qy qz qw)
+                   (cl-transforms::%q*-components lqx lqy lqz lqw qx qy qz qw)))
+               (unless (tf-frame-static frame)
+                 (setf stamp (min stamp (%ts-stamp tr))))
+               (setf frame (tf-frame-parent frame))))
+    (setf (aref buffer base) x (aref buffer (+ base 1)) y (aref buffer (+ base 2)) z
+          (aref buffer (+ base 3)) qx (aref buffer (+ base 4)) qy
+          (aref buffer (+ base 5)) qz (aref buffer (+ base 6)) qw
+          (aref buffer (+ base 7)) stamp)
+    nil))
+
+(declaim (inline %identity-into))
+(defun %identity-into (buffer base)
+  "Store the identity transform and the stamp most-positive-double-float at BASE of BUFFER."
+  (declare (type %lookup-buffer buffer) (type fixnum base))
+  (setf (aref buffer base) 0d0 (aref buffer (+ base 1)) 0d0 (aref buffer (+ base 2)) 0d0
+        (aref buffer (+ base 3)) 0d0 (aref buffer (+ base 4)) 0d0 (aref buffer (+ base 5)) 0d0
+        (aref buffer (+ base 6)) 1d0 (aref buffer (+ base 7)) most-positive-double-float))
+
+(defun %solve (source target buffer)
+  "Store into BUFFER the transform mapping points of the TF-FRAME SOURCE into the TF-FRAME
+TARGET, composed along the tree path through their nearest common ancestor (the quaternion not
+yet renormalised), and the oldest stamp of the non-static links used (0 when there are none).
+True on success; NIL when the frames lie in different trees."
+  (declare (type tf-frame source target) (type %lookup-buffer buffer)
            (optimize (speed 3) (safety 0)))
-  (let ((s source) (g target)
-        (ds (%depth source)) (dg (%depth target))
-        (stamp most-positive-double-float)
-        ;; source -> ancestor and target -> ancestor, as translation and quaternion
-        (sx 0d0) (sy 0d0) (sz 0d0) (sqx 0d0) (sqy 0d0) (sqz 0d0) (sqw 1d0)
-        (gx 0d0) (gy 0d0) (gz 0d0) (gqx 0d0) (gqy 0d0) (gqz 0d0) (gqw 1d0))
-    (declare (type fixnum ds dg) (type double-float stamp sx sy sz sqx sqy sqz sqw
-                                                     gx gy gz gqx gqy gqz gqw))
-    (macrolet ((climb (frame x y z qx qy qz qw)
-                 ;; (x y z q) := link(frame) * (x y z q); frame := parent(frame)
-                 `(let ((tr (tf-frame-transform ,frame)))
-                    (cl-transforms::with-transform-components
-                        ((ltx lty ltz lqx lqy lqz lqw) tr)
-                      (multiple-value-bind (rx ry rz)
-                          (cl-transforms::%rotate-components lqx lqy lqz lqw ,x ,y ,z)
-                        (setf ,x (+ rx ltx) ,y (+ ry lty) ,z (+ rz ltz)))
-                      (multiple-value-setq (,qx ,qy ,qz ,qw)
-                        (cl-transforms::%q*-components lqx lqy lqz lqw ,qx ,qy ,qz ,qw)))
-                    (unless (tf-frame-static ,frame)
-                      (setf stamp (min stamp (%ts-stamp tr))))
-                    (setf ,frame (tf-frame-parent ,frame)))))
-      (loop while (> ds dg) do (climb s sx sy sz sqx sqy sqz sqw) (decf ds))
-      (loop while (> dg ds) do (climb g gx gy gz gqx gqy gqz gqw) (decf dg))
-      (loop until (eq s g)
-            do (when (null (tf-frame-parent s))
+  (let ((ds (%depth source)) (dg (%depth target)) (a source) (b target))
+    (declare (type fixnum ds dg))
+    ;; the nearest common ancestor, and how many links lie on each side of it
+    (let ((da ds) (db dg))
+      (declare (type fixnum da db))
+      (loop while (> da db) do (setf a (tf-frame-parent a)) (decf da))
+      (loop while (> db da) do (setf b (tf-frame-parent b)) (decf db))
+      (loop until (eq a b)
+            do (when (null (tf-frame-parent a))
                  (return-from %solve nil))
-               (climb s sx sy sz sqx sqy sqz sqw)
-               (climb g gx gy gz gqx gqy gqz gqw))
-      ;; target <- source = inverse(ancestor <- target) * (ancestor <- source)
+               (setf a (tf-frame-parent a) b (tf-frame-parent b))
+               (decf da))
+      ;; source -> ancestor at 0, target -> ancestor at 8
+      (%identity-into buffer 0)
+      (%identity-into buffer 8)
+      (%climb source (- ds da) buffer 0)
+      (%climb target (- dg da) buffer 8))
+    ;; target <- source = inverse(ancestor <- target) * (ancestor <- source)
+    (let ((sx (aref buffer 0)) (sy (aref buffer 1)) (sz (aref buffer 2))
+          (sqx (aref buffer 3)) (sqy (aref buffer 4)) (sqz (aref buffer 5)) (sqw (aref buffer 6))
+          (gx (aref buffer 8)) (gy (aref buffer 9)) (gz (aref buffer 10))
+          (gqx (aref buffer 11)) (gqy (aref buffer 12)) (gqz (aref buffer 13))
+          (gqw (aref buffer 14))
+          (stamp (min (aref buffer 7) (aref buffer 15))))
       (multiple-value-bind (rx ry rz)
           (cl-transforms::%rotate-components (- gqx) (- gqy) (- gqz) gqw
                                              (- sx gx) (- sy gy) (- sz gz))
         (multiple-value-bind (qx qy qz qw)
             (cl-transforms::%q*-components (- gqx) (- gqy) (- gqz) gqw sqx sqy sqz sqw)
-          (values (cl-transforms::%unit-transform rx ry rz qx qy qz qw)
-                  (if (= stamp most-positive-double-float) 0d0 stamp)))))))
+          (setf (aref buffer 0) rx (aref buffer 1) ry (aref buffer 2) rz
+                (aref buffer 3) qx (aref buffer 4) qy (aref buffer 5) qz (aref buffer 6) qw
+                (aref buffer 7) (if (= stamp most-positive-double-float) 0d0 stamp))
+          t)))))
 
-(defun %try-lookup (transformer target source)
-  "Under the lock: (values transform stamp) mapping SOURCE points into TARGET, or
-(values nil error-class description) when the frames are unknown or not connected."
-  (let* ((frames (transformer-frames transformer))
-         (s (gethash source frames))
-         (g (gethash target frames)))
-    (cond ((string= target source)
-           (values (cl-transforms:make-identity-transform) 0d0))
+(defun %try-lookup (transformer target source buffer)
+  "Under the lock: true when the transform mapping SOURCE points into TARGET and its stamp are
+now in BUFFER; otherwise (values nil error-class description) when the frames are unknown or not
+connected."
+  (let ((s (%find-frame transformer source))
+        (g (%find-frame transformer target)))
+    (cond ((if (and s g) (eq s g) (string= target source))
+           (%identity-into buffer 0)
+           (setf (aref buffer 7) 0d0)
+           t)
           ((null s)
            (values nil 'tf-lookup-error (format nil "frame ~s does not exist" source)))
           ((null g)
            (values nil 'tf-lookup-error (format nil "frame ~s does not exist" target)))
+          ((%solve s g buffer) t)
           (t
-           (multiple-value-bind (tr stamp) (%solve s g)
-             (if tr
-                 (values tr stamp)
-                 (values nil 'tf-connectivity-error
-                         "the frames are not connected in the frame tree")))))))
+           (values nil 'tf-connectivity-error
+                   "the frames are not connected in the frame tree")))))
 
-(defun %lookup (transformer target source timeout place)
-  "The transform mapping SOURCE points into TARGET, the oldest stamp used and the normalised
-target and source names, waiting up to TIMEOUT seconds for the frames to be connected; signals a
-TRANSFORM-STAMPED-ERROR otherwise."
-  (let* ((target (%frame-name target place))
-         (source (%frame-name source place))
-         (timeout (%timeout timeout place))
-         (lock (transformer-lock transformer))
-         (deadline nil))
+(defun %wait-and-lookup (transformer target source timeout buffer)
+  "Wait up to TIMEOUT seconds for %TRY-LOOKUP of TARGET and SOURCE to succeed: true then, else
+(values nil error-class description)."
+  (let ((lock (transformer-lock transformer))
+        (deadline (+ (get-internal-real-time)
+                     (round (* timeout internal-time-units-per-second)))))
     (sb-thread:with-recursive-lock (lock)
       (loop
-        (multiple-value-bind (result stamp-or-class description)
-            (%try-lookup transformer target source)
-          (when result
-            (return (values result stamp-or-class target source)))
-          (unless deadline
-            (setf deadline (+ (get-internal-real-time)
-                              (round (* timeout internal-time-units-per-second)))))
+        (multiple-value-bind (ok class description)
+            (%try-lookup transformer target source buffer)
+          (when ok
+            (return t))
           (let ((remaining (/ (- deadline (get-internal-real-time))
                               (float internal-time-units-per-second 1d0))))
             (unless (plusp remaining)
-              (error stamp-or-class :target-frame target :source-frame source
-                                    :description description))
+              (return (values nil class description)))
             (incf (transformer-waiters transformer))
             (unwind-protect
                  (bt:condition-wait (transformer-changed transformer) lock :timeout remaining)
               (decf (transformer-waiters transformer)))))))))
+
+(defun %lookup (transformer target source timeout place buffer)
+  "Store the transform mapping SOURCE points into TARGET and the oldest stamp used into
+BUFFER (see %SOLVE), waiting up to TIMEOUT seconds for the frames to be connected, and return
+the normalised target and source names; signals a TRANSFORM-STAMPED-ERROR otherwise."
+  (let* ((target (%frame-name target place))
+         (source (%frame-name source place))
+         (timeout (%timeout timeout place)))
+    (multiple-value-bind (ok class description)
+        (%with-transformer-lock (transformer) (%try-lookup transformer target source buffer))
+      (unless ok
+        (if (plusp timeout)
+            (multiple-value-setq (ok class description)
+              (%wait-and-lookup transformer target source timeout buffer))
+            (setf ok nil)))
+      (unless ok
+        (error class :target-frame target :source-frame source :description description))
+      (values target source))))
+
+(defmacro %with-buffer-transform (((tx ty tz qx qy qz qw) buffer) &body body)
+  "Bind TX .. QW to the transform in BUFFER, its quaternion scaled to unit norm as
+CL-TRANSFORMS::%UNIT-TRANSFORM does, around BODY."
+  (let ((b (gensym "BUFFER")) (s (gensym "S")))
+    `(let* ((,b ,buffer)
+            (,tx (aref ,b 0)) (,ty (aref ,b 1)) (,tz (aref ,b 2))
+            (,qx (aref ,b 3)) (,qy (aref ,b 4)) (,qz (aref ,b 5)) (,qw (aref ,b 6)))
+       (declare (type %lookup-buffer ,b) (type double-float ,tx ,ty ,tz ,qx ,qy ,qz ,qw))
+       (unless (cl-transforms::%unit-norm-p ,qx ,qy ,qz ,qw)
+         (let ((,s (cl-transforms::%unit-scale ,qx ,qy ,qz ,qw nil)))
+           (declare (type double-float ,s))
+           (setf ,qx (* ,qx ,s) ,qy (* ,qy ,s) ,qz (* ,qz ,s) ,qw (* ,qw ,s))))
+       ,@body)))
+
+(defun %buffer-transform (buffer)
+  "The TRANSFORM in BUFFER."
+  (%with-buffer-transform ((tx ty tz qx qy qz qw) buffer)
+    (cl-transforms::%make-raw-transform tx ty tz qx qy qz qw)))
 
 (defun lookup-transform (transformer target-frame source-frame &key time timeout)
   "The TRANSFORM-STAMPED from TARGET-FRAME to SOURCE-FRAME: the pose of SOURCE-FRAME in
@@ -228,18 +361,23 @@ to appear, then signals TF-LOOKUP-ERROR (unknown frame) or TF-CONNECTIVITY-ERROR
 both frames."
   (%check-transformer transformer 'lookup-transform)
   (let ((time (and time (cl-transforms::ensure-double time "LOOKUP-TRANSFORM :time"))))
-    (multiple-value-bind (tr stamp target source)
-        (%lookup transformer target-frame source-frame timeout 'lookup-transform)
-      (cl-transforms::with-transform-components ((tx ty tz qx qy qz qw) tr)
-        (%make-raw-transform-stamped target source (if (and time (plusp time)) time stamp)
-                                     tx ty tz qx qy qz qw)))))
+    (%with-lookup-buffer (buffer)
+      (multiple-value-bind (target source)
+          (%lookup transformer target-frame source-frame timeout 'lookup-transform buffer)
+        (%with-buffer-transform ((tx ty tz qx qy qz qw) buffer)
+          (%make-raw-transform-stamped target source
+                                       (if (and time (plusp time)) time (aref buffer 7))
+                                       tx ty tz qx qy qz qw))))))
 
 (defun can-transform (transformer target-frame source-frame &key time timeout)
   "True when LOOKUP-TRANSFORM with the same frames would succeed (waiting up to TIMEOUT)."
   (declare (ignore time))
   (%check-transformer transformer 'can-transform)
-  (handler-case (progn (%lookup transformer target-frame source-frame timeout 'can-transform) t)
-    (transform-stamped-error () nil)))
+  (%with-lookup-buffer (buffer)
+    (handler-case (progn (%lookup transformer target-frame source-frame timeout 'can-transform
+                                  buffer)
+                         t)
+      (transform-stamped-error () nil))))
 
 (defun wait-for-transform (transformer &key target-frame source-frame time (timeout 1d0))
   "Wait up to TIMEOUT seconds until TARGET-FRAME and SOURCE-FRAME are connected; true if they
@@ -254,10 +392,10 @@ transforms are always used."
   (%check-transformer transformer 'transform-pose-stamped)
   (unless (pose-stamped-p pose)
     (cl-transforms::input-error pose "a POSE-STAMPED as :pose" 'transform-pose-stamped))
-  (multiple-value-bind (tr stamp target)
-      (%lookup transformer target-frame (%ps-frame-id pose) timeout 'transform-pose-stamped)
-    (declare (ignore stamp))
-    (let ((result (transform-pose tr pose)))
+  (%with-lookup-buffer (buffer)
+    (let* ((target (%lookup transformer target-frame (%ps-frame-id pose) timeout
+                            'transform-pose-stamped buffer))
+           (result (transform-pose (%buffer-transform buffer) pose)))
       (%make-pose-stamped target (%ps-stamp pose) (origin result) (orientation result)))))
 
 (defun transform-point-stamped (transformer &key target-frame point timeout use-current-ros-time)
@@ -267,10 +405,10 @@ Errors as for LOOKUP-TRANSFORM."
   (%check-transformer transformer 'transform-point-stamped)
   (unless (point-stamped-p point)
     (cl-transforms::input-error point "a POINT-STAMPED as :point" 'transform-point-stamped))
-  (multiple-value-bind (tr stamp target)
-      (%lookup transformer target-frame (%pts-frame-id point) timeout 'transform-point-stamped)
-    (declare (ignore stamp))
-    (let ((p (transform-point tr point)))
+  (%with-lookup-buffer (buffer)
+    (let* ((target (%lookup transformer target-frame (%pts-frame-id point) timeout
+                            'transform-point-stamped buffer))
+           (p (transform-point (%buffer-transform buffer) point)))
       (%make-point-stamped target (%pts-stamp point) (x p) (y p) (z p)))))
 
 (defmacro with-transforms-batch ((transformer) &body body)
@@ -310,5 +448,6 @@ frames no remaining transform mentions. Returns TRANSFORMER."
                        (gethash (tf-frame-parent frame) used) t))
       (loop for name in (alexandria:hash-table-keys frames)
             unless (gethash (gethash name frames) used)
-              do (remhash name frames))))
+              do (remhash name frames))
+      (%flush-name-cache transformer)))
   transformer)

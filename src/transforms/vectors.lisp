@@ -155,44 +155,77 @@ A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
 
 ;;; Vector arithmetic
 
-(declaim (inline %tame-number-p %tame-vector-p))
-(defun %tame-number-p (x)
-  "True when X is not a real, or is zero, or has a magnitude within 1d-150 .. 1d150 (never for
-NaN or infinity, which the operation's own checks name): sums,
-products and quotients of such numbers stay within double-float range."
-  (or (not (realp x))
-      (and (not (and (floatp x) (or (sb-ext:float-nan-p x) (sb-ext:float-infinity-p x))))
-           (let ((a (abs x))) (or (zerop a) (and (< a 1d150) (> a 1d-150)))))))
-(defun %tame-vector-p (v)
-  "True when every coordinate of the 3D-VECTOR V is zero or within 1d-150 .. 1d150 in magnitude."
-  (flet ((tame (c)
-           (declare (double-float c))
-           (let ((a (abs c))) (or (= a 0d0) (and (< a 1d150) (> a 1d-150))))))
-    (declare (inline tame))
-    (and (tame (%v-x v)) (tame (%v-y v)) (tame (%v-z v)))))
+;;; The overflow guard of the vector operations. Arguments of moderate magnitude cannot make an
+;;; operation overflow, so only the others pay for a handler: the test looks at the binary
+;;; exponents of all coordinates at once, with integer operations and a single branch. A double
+;;; is small when its magnitude is below 2^498 (about 8d149) and a divisor when it is also at
+;;; least 2^-497 (about 2d-150): sums, products and quotients of such numbers stay far within
+;;; double-float range. NaN and infinity are never small; the operation's own checks name them.
 
-(defmacro define-vector-op (name lambda-list doc &body body)
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defconstant +small-exponent-limit+ (+ 1023 498)
+    "Biased exponents of small doubles are below this.")
+  (defconstant +divisor-exponent-floor+ (- 1023 497)
+    "Biased exponents of divisors are at least this."))
+
+(defmacro %exponent-flags (d &optional divisor)
+  "An integer of the double float D whose bits above the eleventh are all clear when D is small
+(when DIVISOR, when it is a divisor); such flags of several doubles can be combined by LOGIOR."
+  (let ((e (gensym "E")))
+    `(let ((,e (ldb (byte 11 20) (sb-kernel:double-float-high-bits ,d))))
+       ;; e + (2048 - limit) reaches bit 11 exactly when e >= limit; e - floor is negative
+       ;; (all high bits set) exactly when e < floor
+       ,(if divisor
+            `(logior (+ ,e (- 2048 +small-exponent-limit+)) (- ,e +divisor-exponent-floor+))
+            `(+ ,e (- 2048 +small-exponent-limit+))))))
+
+(defmacro %vector-flags (v &optional divisor)
+  "The LOGIOR of the %EXPONENT-FLAGS of the coordinates of the 3D-VECTOR V."
+  (let ((g (gensym "V")))
+    `(let ((,g ,v))
+       (logior (%exponent-flags (%v-x ,g) ,divisor) (%exponent-flags (%v-y ,g) ,divisor)
+               (%exponent-flags (%v-z ,g) ,divisor)))))
+
+(declaim (inline %small-number-p))
+(defun %small-number-p (x &optional divisor)
+  "True when the scalar argument X is a small double float (a divisor, when DIVISOR), a fixnum
+or a single float; false for everything else, which takes the guarded path."
+  (typecase x
+    (double-float (not (logtest (if divisor (%exponent-flags x t) (%exponent-flags x)) -2048)))
+    ((or fixnum single-float) t)
+    (t nil)))
+
+(defmacro define-vector-op (name-and-options lambda-list doc &body body)
   "Define NAME as an inline function whose vector arguments are checked to be 3D-VECTORs. A
-floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the arguments."
-  (let ((vectors (remove-if-not (lambda (a) (member a '(v v1 v2 a b))) lambda-list))
-        (args (remove-if (lambda (a) (member a lambda-list-keywords))
-                         (mapcar (lambda (a) (if (consp a) (car a) a)) lambda-list))))
-    `(progn
-       (declaim (inline ,name))
-       (defun ,name ,lambda-list
-         ,doc
-         ,@(loop for v in vectors
-                 collect `(unless (3d-vector-p ,v) (input-error ,v "a 3D-VECTOR" ',name)))
-         (flet ((body () ,@body))
-           (declare (inline body))
-           ;; arguments of tame magnitude cannot overflow: no handler on the common path
-           (if (and ,@(loop for a in args
-                            collect (if (member a vectors) `(%tame-vector-p ,a) `(%tame-number-p ,a))))
-               (body)
-               (handler-case (body)
-                 (floating-point-overflow ()
-                   (input-error (list ,@args) "arguments whose result is within double-float range"
-                                ',name)))))))))
+floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the arguments. NAME may be
+given as (NAME :divisors ARGS): the arguments ARGS are divided by."
+  (destructuring-bind (name &key divisors) (alexandria:ensure-list name-and-options)
+    (let* ((vectors (remove-if-not (lambda (a) (member a '(v v1 v2 a b))) lambda-list))
+           (args (remove-if (lambda (a) (member a lambda-list-keywords))
+                            (mapcar (lambda (a) (if (consp a) (car a) a)) lambda-list)))
+           (scalars (remove-if (lambda (a) (member a vectors)) args))
+           (guarded (intern (format nil "%~a/GUARDED" name) :cl-transforms)))
+      `(progn
+         (defun ,guarded ,args
+           ,(format nil "The body of ~a under a handler of floating-point overflow." name)
+           (handler-case (progn ,@body)
+             (floating-point-overflow ()
+               (input-error (list ,@args) "arguments whose result is within double-float range"
+                            ',name))))
+         (declaim (inline ,name))
+         (defun ,name ,lambda-list
+           ,doc
+           ,@(loop for v in vectors
+                   collect `(unless (3d-vector-p ,v) (input-error ,v "a 3D-VECTOR" ',name)))
+           ;; arguments of small magnitude cannot overflow: no handler on the common path
+           (if (and ,@(loop for a in scalars
+                            collect `(%small-number-p ,a ,(and (member a divisors) t)))
+                    (not (logtest (logior ,@(loop for v in vectors
+                                                  collect `(%vector-flags
+                                                            ,v ,(and (member v divisors) t))))
+                                  -2048)))
+               (progn ,@body)
+               (,guarded ,@args)))))))
 
 (define-vector-op v+ (v1 v2)
   "The sum of the 3D-VECTORs V1 and V2."
@@ -207,7 +240,7 @@ floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the argumen
   (let ((s (ensure-double scalar "V* scalar")))
     (%make-3d-vector (* s (%v-x v)) (* s (%v-y v)) (* s (%v-z v)))))
 
-(define-vector-op v/ (v scalar)
+(define-vector-op (v/ :divisors (scalar)) (v scalar)
   "The 3D-VECTOR V divided by the non-zero real SCALAR."
   (let ((s (ensure-double scalar "V/ scalar")))
     (when (zerop s) (input-error scalar "a non-zero divisor" 'v/))
@@ -221,7 +254,7 @@ floating-point overflow in BODY signals TRANSFORM-INPUT-ERROR naming the argumen
   "The component-wise product of two 3D-VECTORs."
   (%make-3d-vector (* (%v-x v1) (%v-x v2)) (* (%v-y v1) (%v-y v2)) (* (%v-z v1) (%v-z v2))))
 
-(define-vector-op v/-pairwise (v1 v2)
+(define-vector-op (v/-pairwise :divisors (v2)) (v1 v2)
   "The component-wise quotient V1 / V2 of two 3D-VECTORs; V2 must have no zero coordinate."
   (when (or (zerop (%v-x v2)) (zerop (%v-y v2)) (zerop (%v-z v2)))
     (input-error v2 "a divisor vector without zero coordinates" 'v/-pairwise))

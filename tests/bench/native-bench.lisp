@@ -42,7 +42,8 @@ of raw_bench.cpp."
 (defparameter *processes* 3
   "Processes each side of the per-call teleport row is measured in: its time depends on where a
 process's heap, stacks and libraries lie (aliasing of loads and stores), so both sides report
-the median over several processes.")
+the median over several processes, run in interleaved rounds (one of ours, one of the raw
+program's) so that a noisy stretch of the machine's load falls on both sides.")
 
 (defun parse-times (out)
   "Alist (name . seconds) of the lines \"name seconds\" of OUT."
@@ -207,6 +208,27 @@ lies in memory)."
     (format t "~&teleport ~,12f~%" (teleport-time w boxes))
     (destroy-world w)))
 
+(defun teleport-rounds ()
+  "The teleport row's times, ours and the raw program's, as two values: each the median over
+*PROCESSES* fresh processes, measured in interleaved rounds (a process of the raw program, then
+one of ours, in each round); NIL for a side that could not run."
+  (let ((ours '()) (raw '())
+        (raw-exe (namestring (merge-pathnames "build/raw_bench" *native-dir*))))
+    (flet ((teleport-of (out)
+             (and out (cdr (assoc "teleport" (parse-times out) :test #'string=)))))
+      (dotimes (k *processes*)
+        (let ((r (teleport-of (cram-bench:run-peer raw-exe "teleport"))))
+          (when r (push r raw)))
+        (let ((o (teleport-of
+                  (cram-bench:run-peer
+                   "sbcl" "--noinform" "--non-interactive" "--no-userinit"
+                   "--eval" "(require :asdf)"
+                   "--load" (namestring (merge-pathnames "bench-lib.lisp" *bench-dir*))
+                   "--load" (namestring (merge-pathnames "native-bench.lisp" *bench-dir*))
+                   "--eval" "(cram-native-bench::print-teleport-time)"))))
+          (when o (push o ours)))))
+    (values (and ours (median ours)) (and raw (median raw)))))
+
 (cram-bench:define-benchmark native ()
   (let ((raw (raw-times)))
     (multiple-value-bind (w r boxes) (build-scene)
@@ -219,20 +241,16 @@ lies in memory)."
                   (i 0))
              (declare (type fixnum i) (type (simple-array double-float (7)) pose))
              (dotimes (k 45) (setf (aref joints k) k))
-             (anchor "native: teleport a body (median of 8 bodies, 3 processes)"
-                     (row "native: teleport a body (median of 8 bodies, 3 processes)"
-                          (median (cons (teleport-time w boxes)
-                                        (loop repeat (1- *processes*)
-                                              for out = (cram-bench:run-peer
-                                                         "sbcl" "--noinform" "--non-interactive" "--no-userinit"
-                                                         "--eval" "(require :asdf)"
-                                                         "--load" (namestring (merge-pathnames "bench-lib.lisp" *bench-dir*))
-                                                         "--load" (namestring (merge-pathnames "native-bench.lisp" *bench-dir*))
-                                                         "--eval" "(cram-native-bench::print-teleport-time)")
-                                              for v = (and out (cdr (assoc "teleport" (parse-times out) :test #'string=)))
-                                              when v collect v)))
-                          "teleport" raw)
-                     1d-6)
+             (multiple-value-bind (ours peer) (teleport-rounds)
+               (let ((ours (or ours (teleport-time w boxes)))
+                     (raw (if peer
+                              (acons "teleport" peer (remove "teleport" raw :key #'car
+                                                                             :test #'string=))
+                              raw)))
+                 (anchor "native: teleport a body (median of 8 bodies, 3 processes)"
+                         (row "native: teleport a body (median of 8 bodies, 3 processes)"
+                              ours "teleport" raw)
+                         1d-6)))
              (row "native: teleport a body, then its contacts"
                   (cram-bench:time-per-call
                    (lambda ()

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 using Clock = std::chrono::steady_clock;
@@ -114,7 +115,9 @@ struct Count : btCollisionWorld::ContactResultCallback {
   }
 };
 
-int main() {
+int main(int argc, char **argv) {
+  // "raw_bench teleport": only the teleport row (the interleaved rounds of native-bench.lisp)
+  bool teleport_only = argc > 1 && std::string(argv[1]) == "teleport";
   btBoxShape link_shape(btVector3(0.02, 0.02, 0.04));
   btBoxShape small(btVector3(0.05, 0.05, 0.05));
   btStaticPlaneShape plane(btVector3(0, 0, 1), 0);
@@ -148,6 +151,10 @@ int main() {
   }
   std::sort(tels.begin(), tels.end());
   double t_tel = 0.5 * (tels[3] + tels[4]);
+  if (teleport_only) {
+    printf("teleport %.9g\n", t_tel);
+    return 0;
+  }
   // teleport, then the contacts of the moved body: the cycle of a projection step
   double t_telq = per_call([&](int i) {
     teleport(w, objs[5], btTransform(btQuaternion::getIdentity(), btVector3(1.6 + 1e-3 * (i % 2), -0.8, 0.05)));
