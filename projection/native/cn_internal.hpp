@@ -270,6 +270,8 @@ void move_attached(World &w, int parent, int depth = 0);
 void robot_new_bodies(World &w, Object &o);
 void remove_object_bodies(World &w, Object &o);
 void for_each_rb(const Object &o, const std::function<void(btRigidBody *, int)> &f);
+// a plain body of shape s at pose (mass 0: static) in world wh -> its handle (cn_world.cpp)
+int add_body(int wh, const double *pose, ShapeP s, double mass, const char *what);
 // Union of the AABBs of the bodies of o (or of its link `link`, -1 = all); false if it has none.
 bool union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi);
 
