@@ -201,14 +201,23 @@ A, so (transform* map->base base->hand) is map->hand."
   "The 3D-VECTOR POINT mapped by TRANSFORM: rotation(point) + translation."
   (unless (transform-p transform) (input-error transform "a TRANSFORM" 'transform-point))
   (unless (3d-vector-p point) (input-error point "a 3D-VECTOR" 'transform-point))
-  (handler-case
-      (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
-        (with-transform-components ((tx ty tz qx qy qz qw) transform)
-          (with-vector-components ((vx vy vz) point)
+  (locally (declare (optimize (speed 3) (safety 0) (debug 0)))
+    (with-transform-components ((tx ty tz qx qy qz qw) transform)
+      (with-vector-components ((vx vy vz) point)
+        ;; the rotation is a unit quaternion: small coordinates (see %EXPONENT-FLAGS) cannot
+        ;; overflow, so only the others pay for a handler
+        (if (not (logtest (logior (%exponent-flags tx) (%exponent-flags ty) (%exponent-flags tz)
+                                  (%exponent-flags vx) (%exponent-flags vy) (%exponent-flags vz))
+                          -2048))
             (multiple-value-bind (rx ry rz) (%rotate-components qx qy qz qw vx vy vz)
-              (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz))))))
-    (floating-point-overflow ()
-      (input-error (list transform point) "a transform and a point whose result is within double-float range" 'transform-point))))
+              (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz)))
+            (handler-case
+                (multiple-value-bind (rx ry rz) (%rotate-components qx qy qz qw vx vy vz)
+                  (%make-3d-vector (+ rx tx) (+ ry ty) (+ rz tz)))
+              (floating-point-overflow ()
+                (input-error (list transform point)
+                             "a transform and a point whose result is within double-float range"
+                             'transform-point))))))))
 
 (defun transform-pose (transform pose)
   "The POSE that results from moving POSE by TRANSFORM (POSE expressed in TRANSFORM's parent
