@@ -69,28 +69,58 @@ node runs, else from the project's files."
           cram-tf:*robot-base-frame* (or (rob-int::first-solution-value
                                           '?f `(rob-int:robot-base-frame ,robot-name ?f))
                                          "base_footprint"))
-    (fresh-world)
     (unless (assoc :bottle btr:*mesh-files*) (add-objects-to-mesh-list))
-    (let ((world btr:*current-bullet-world*))
-      (btr:add-object world :static-plane :floor '((0 0 0) (0 0 0 1))
-                      :normal '(0 0 1) :constant 0)
-      (btr:add-object world :urdf kitchen-name '((0 0 0) (0 0 0 1)) :urdf kitchen
-                      :collision-group :static-filter
-                      :collision-mask '(:default-filter :character-filter))
-      (let ((pr2 (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
-        (btr:set-robot-state-from-joints (robot-park-joint-states robot-name) pr2)
-        (multiple-value-bind (torso-link torso-joint)
-            (let ((b (car (prolog `(rob-int:robot-torso-link-joint ,robot-name ?l ?j)))))
-              (values (cut:var-value '?l b) (cut:var-value '?j b)))
-          (declare (ignore torso-link))
-          (when (and (stringp torso-joint) (member torso-joint (btr:joint-names pr2) :test #'equal))
-            (multiple-value-bind (lo hi) (btr:joint-limits pr2 torso-joint)
-              (when (and lo hi)
-                (btr:set-robot-state-from-joints `((,torso-joint ,(/ (+ lo hi) 2))) pr2))))))
-      (btr:debug-window world))
-    (setf cram-tf:*tf-default-timeout* 2.0
-          prolog:*break-on-lisp-errors* t)
-    btr:*current-bullet-world*))
+    (if (template-world-for kitchen robot)
+        (install-copy-of-template)
+        (build-world kitchen kitchen-name robot robot-name)))
+  (setf cram-tf:*tf-default-timeout* 2.0
+        prolog:*break-on-lisp-errors* t)
+  btr:*current-bullet-world*)
+
+(defvar *template* nil
+  "(kitchen-urdf robot-urdf world): a copy of the belief state INIT-PROJECTION built last from
+those parsed URDFs. INIT-PROJECTION gives a copy of it again while the URDFs are the same
+objects: a copy costs a fifth of building the world.")
+
+(defun template-world-for (kitchen robot)
+  "The template world when it was built from the URDFs KITCHEN and ROBOT and still exists."
+  (destructuring-bind (&optional k r world) *template*
+    (and (eq k kitchen) (eq r robot) world
+         (cram-native:world-alive-p (btr:world-handle world))
+         world)))
+
+(defun install-copy-of-template ()
+  "Make a copy of the template world the current world (destroying the previous one)."
+  (let ((old btr:*current-bullet-world*))
+    (setf btr:*current-bullet-world* (btr:copy-world (third *template*)))
+    (when (and old (not (eq old (third *template*))))
+      (ignore-errors (btr:destroy-world old)))
+    (btr:debug-window btr:*current-bullet-world*)))
+
+(defun build-world (kitchen kitchen-name robot robot-name)
+  "Build the belief state from the URDFs: floor, kitchen, robot with parked arms and the torso
+halfway up; keep a copy of it as the template."
+  (fresh-world)
+  (let ((world btr:*current-bullet-world*))
+    (btr:add-object world :static-plane :floor '((0 0 0) (0 0 0 1))
+                    :normal '(0 0 1) :constant 0)
+    (btr:add-object world :urdf kitchen-name '((0 0 0) (0 0 0 1)) :urdf kitchen
+                    :collision-group :static-filter
+                    :collision-mask '(:default-filter :character-filter))
+    (let ((pr2 (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
+      (btr:set-robot-state-from-joints (robot-park-joint-states robot-name) pr2)
+      (multiple-value-bind (torso-link torso-joint)
+          (let ((b (car (prolog `(rob-int:robot-torso-link-joint ,robot-name ?l ?j)))))
+            (values (cut:var-value '?l b) (cut:var-value '?j b)))
+        (declare (ignore torso-link))
+        (when (and (stringp torso-joint) (member torso-joint (btr:joint-names pr2) :test #'equal))
+          (multiple-value-bind (lo hi) (btr:joint-limits pr2 torso-joint)
+            (when (and lo hi)
+              (btr:set-robot-state-from-joints `((,torso-joint ,(/ (+ lo hi) 2))) pr2))))))
+    (let ((old (third *template*)))
+      (setf *template* (list kitchen robot (btr:copy-world world)))
+      (when old (ignore-errors (btr:destroy-world old))))
+    (btr:debug-window world)))
 
 (defun move-kitchen-joint (&key (joint-name "iai_fridge_door_joint") (joint-angle 0.2d0)
                              (kitchen-name btr:*environment-name*))
