@@ -219,3 +219,21 @@ bottle arrived; return the log."
              2.05d0)))
     (let ((pose (demo:generate-robot-pose shelf-two)))
       (is (demo::shelf-view-pose-p pose shelf-two)))))
+
+(test init-projection-gives-a-fresh-world-each-time
+  "INIT-PROJECTION copies the belief state it built before: what a run changed is gone."
+  (btw-tut:init-projection)
+  (let ((first btr:*current-bullet-world*))
+    (btw-tut::spawn-bottle)
+    (btw-tut:move-kitchen-joint :joint-name "iai_fridge_door_joint" :joint-angle 0.3d0)
+    (setf (btr:pose (btr:get-robot-object))
+          (cl-transforms:make-pose (cl-transforms:make-3d-vector 1 1 0) (cl-transforms:make-identity-rotation)))
+    (btw-tut:init-projection)
+    (let ((world btr:*current-bullet-world*))
+      (is (not (eq first world)))
+      (is (null (btr:object world 'btw-tut::bottle-1)))
+      (is (< (abs (btr:joint-state (btr:object world btr:*environment-name*) "iai_fridge_door_joint")) 1d-9))
+      (is (< (cl-transforms:v-norm (cl-transforms:origin (btr:pose (btr:get-robot-object)))) 1d-9))
+      (is (equal (mapcar #'btr:name (btr:objects world))
+                 (progn (setf btw-tut::*template* nil) (btw-tut:init-projection)
+                        (mapcar #'btr:name (btr:objects btr:*current-bullet-world*))))))))
