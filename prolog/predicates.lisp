@@ -80,8 +80,18 @@ built-in of the same name, otherwise FUNCTOR's (undefined) one."
         pred
         (or (gethash (symbol-name functor) *builtin-names*) pred))))
 
+(declaim (type (cons fixnum null) *generation*))
+(defvar *generation* (list 0)
+  "A cell holding the number of changes made to the database so far.")
+
+(defun database-generation ()
+  "A number that changes whenever a clause, fact or handler of any predicate changes: what a
+query over facts returned stays valid while it is the same."
+  (car *generation*))
+
 (defun invalidate-pred (pred)
-  "Make PRED recompile on its next call."
+  "Make PRED recompile on its next call (and count a change of the database)."
+  (sb-ext:atomic-incf (car *generation*))
   (setf (pred-entry pred) (make-lazy-entry pred)))
 
 (defun undefined-entry (pred)

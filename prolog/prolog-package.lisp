@@ -47,6 +47,7 @@ Decisions on CRAM's quirks:
    #:*break-on-lisp-errors* #:propagate-lisp-errors #:lisp-errors-propagate-p
    #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
    #:fact-group-names #:fact-group-clauses #:remove-fact-group #:predicate-clauses
+   #:database-generation
    #:add-fact #:remove-facts #:predicate
    ;; native predicates
    #:def-native-predicate #:solve-continue #:unify-terms #:unify-each #:deref-term

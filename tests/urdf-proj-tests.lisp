@@ -389,3 +389,20 @@ are; the seed replay of the tutorial covers it), and a warning names the frame o
       (btr:simulate world 5)
       (is (< (abs (- (cl-transforms:x (cl-transforms:origin (btr:pose bottle))) -1.6d0)) 0.02))
       (btr-utils:kill-object 'respawn-bottle))))
+
+(test robot-fact-answers-follow-the-database
+  "The kept answers to robot fact queries change as soon as the facts change; queries over rules
+that read Lisp state are not kept."
+  (unwind-protect
+       (progn
+         (eval '(prolog:def-fact-group fact-cache-test-robot (rob-int:robot-odom-frame)
+                 (prolog:<- (rob-int:robot-odom-frame :fact-cache-bot "odom_a"))))
+         (is (equal "odom_a" (urdf-proj::fact-value '?f '(rob-int:robot-odom-frame :fact-cache-bot ?f))))
+         (eval '(prolog:def-fact-group fact-cache-test-robot (rob-int:robot-odom-frame)
+                 (prolog:<- (rob-int:robot-odom-frame :fact-cache-bot "odom_b"))))
+         (is (equal "odom_b" (urdf-proj::fact-value '?f '(rob-int:robot-odom-frame :fact-cache-bot ?f))))
+         (prolog:remove-fact-group 'fact-cache-test-robot)
+         (is (null (urdf-proj::fact-value '?f '(rob-int:robot-odom-frame :fact-cache-bot ?f))))
+         ;; tcp-in-ee-pose reads a special variable: its answers are never kept
+         (is (null (urdf-proj::plain-facts-p 'rob-int:tcp-in-ee-pose))))
+    (prolog:remove-fact-group 'fact-cache-test-robot)))

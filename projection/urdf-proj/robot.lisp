@@ -24,17 +24,53 @@ everything, as on CRAM.")
   "The name of the current robot description."
   (rob-int:current-robot-name))
 
+(defvar *fact-answers* (make-hash-table :test 'equal :synchronized t)
+  "Query → (database generation . every solution, or :NOT-PLAIN) of the robot fact queries.")
+
+(defun plain-facts-p (functor)
+  "True when every clause of FUNCTOR is a fact without a body (or a placeholder whose body is
+just FAIL): its answers depend on the database alone (no Lisp, no special variable, no world
+state)."
+  (let ((clauses (prolog:predicate-clauses functor)))
+    (and clauses
+         (every (lambda (c)
+                  (or (null (cdr c))
+                      (and (null (cddr c)) (consp (second c)) (null (cdr (second c)))
+                           (string= (symbol-name (car (second c))) "FAIL"))))
+                clauses)
+         (null (prolog::pred-handler (gethash functor prolog::*predicates*))))))
+
+(defun cached-fact-solutions (query)
+  "Every solution of QUERY when it asks about plain facts (PLAIN-FACTS-P), kept until the
+database changes (the motions ask the same few questions about the robot many times); second
+value NIL for any other query, which the caller then runs itself."
+  (let ((generation (prolog:database-generation))
+        (cached (gethash query *fact-answers*)))
+    (cond ((and cached (eql (car cached) generation))
+           (if (eq (cdr cached) :not-plain) (values nil nil) (values (cdr cached) t)))
+          (t
+           (when (> (hash-table-count *fact-answers*) 1000) (clrhash *fact-answers*))
+           (if (and (consp query) (symbolp (car query)) (plain-facts-p (car query)))
+               (let ((solutions (cut:force-ll (prolog:prolog query))))
+                 (setf (gethash (copy-tree query) *fact-answers*) (cons generation solutions))
+                 (values solutions t))
+               (progn (setf (gethash (copy-tree query) *fact-answers*) (cons generation :not-plain))
+                      (values nil nil)))))))
+
 (defun fact-value (variable query)
   "The value of VARIABLE in the first solution of the Prolog QUERY, or NIL; second value: found."
-  (let ((solutions (prolog:prolog query)))
-    (if solutions
-        (values (cut:var-value variable (cut:lazy-car solutions)) t)
-        (values nil nil))))
+  (multiple-value-bind (solutions cached) (cached-fact-solutions query)
+    (let ((solutions (if cached solutions (prolog:prolog query))))
+      (if solutions
+          (values (cut:var-value variable (cut:lazy-car solutions)) t)
+          (values nil nil)))))
 
 (defun fact-values (variable query)
   "The values of VARIABLE in every solution of QUERY, without duplicates, in order."
-  (remove-duplicates (mapcar (lambda (b) (cut:var-value variable b)) (cut:force-ll (prolog:prolog query)))
-                     :test #'equal :from-end t))
+  (multiple-value-bind (solutions cached) (cached-fact-solutions query)
+    (remove-duplicates (mapcar (lambda (b) (cut:var-value variable b))
+                               (if cached solutions (cut:force-ll (prolog:prolog query))))
+                       :test #'equal :from-end t)))
 
 (defun check-arm (arm)
   "ARM when the current robot has it; an error naming it and the known arms otherwise."

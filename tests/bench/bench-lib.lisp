@@ -3,11 +3,21 @@
 (defpackage :cram-bench
   (:use :cl)
   (:export #:now-seconds #:median-seconds #:time-per-call #:run-peer #:add-row #:print-table
-           #:define-benchmark #:run-benchmarks #:format-seconds))
+           #:define-benchmark #:run-benchmarks #:format-seconds #:load-tool))
 
 (in-package :cram-bench)
 
 (defvar *rows* '() "Rows collected in this run, newest first.")
+
+(defparameter *tools-directory*
+  (merge-pathnames "../../tools/" (make-pathname :name nil :type nil :defaults *load-truename*))
+  "The repository's tools/ directory.")
+
+(defun load-tool (file &optional package)
+  "Load tools/FILE quietly, unless the package named PACKAGE (a string designator) exists."
+  (unless (and package (find-package package))
+    (handler-bind ((warning #'muffle-warning))
+      (load (merge-pathnames file *tools-directory*)))))
 (defvar *benchmarks* '() "Registered benchmarks as (name . function), in order of definition.")
 
 (defun now-seconds ()

@@ -8,8 +8,7 @@
 (defparameter *tools* (merge-pathnames "../../tools/" (make-pathname :name nil :type nil :defaults *load-truename*))
   "The tools/ directory.")
 
-(handler-bind ((warning #'muffle-warning))
-  (load (merge-pathnames "demo.lisp" *tools*)))
+(load-tool "demo.lisp" :cram-plans-demo)
 
 (define-benchmark move-bottle ()
   (let* ((pose btw-tut:*bottle-pose-in-view*)

@@ -10,10 +10,7 @@
 
 (in-package :cram-bench.soak)
 
-(unless (find-package :cram-plans-demo)
-  (handler-bind ((warning #'muffle-warning))
-    (load (merge-pathnames "../../tools/demo.lisp"
-                           (make-pathname :name nil :type nil :defaults *load-truename*)))))
+(load-tool "demo.lisp" :cram-plans-demo)
 
 (defun env-integer (name default)
   (or (ignore-errors (parse-integer (uiop:getenv name))) default))

@@ -9,10 +9,7 @@
 
 (in-package :cram-bench.profile)
 
-(unless (find-package :cram-plans-demo)
-  (handler-bind ((warning #'muffle-warning))
-    (load (merge-pathnames "../../tools/demo.lisp"
-                           (make-pathname :name nil :type nil :defaults *load-truename*)))))
+(load-tool "demo.lisp" :cram-plans-demo)
 
 (defparameter *layers*
   '(("world set-up (init-projection, spawning)"

@@ -6,13 +6,8 @@
 
 (in-package :cram-bench.robot-ros)
 
-(unless (find-package :cram-plans-demo)
-  (handler-bind ((warning #'muffle-warning))
-    (load (merge-pathnames "../../tools/demo.lisp"
-                           (make-pathname :name nil :type nil :defaults *load-truename*)))))
-(handler-bind ((warning #'muffle-warning))
-  (load (merge-pathnames "../../tools/robot-run.lisp"
-                         (make-pathname :name nil :type nil :defaults *load-truename*))))
+(load-tool "demo.lisp" :cram-plans-demo)
+(load-tool "robot-run.lisp")
 
 (defun motion-count (counts)
   "Goals and trajectories the node received (perception messages left out)."

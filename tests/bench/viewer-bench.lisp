@@ -7,8 +7,8 @@
 
 (in-package :cram-bench.viewer)
 
+(load-tool "demo.lisp" :cram-plans-demo)
 (handler-bind ((warning #'muffle-warning))
-  (load (merge-pathnames "../../tools/demo.lisp" *load-truename*))
   (asdf:load-system "cram-plans/viewer"))
 
 (defun move-bottle-median (runs)
