@@ -110,9 +110,18 @@ of OBJECT in TF."
     written))
 
 (defun environment-signature (object)
-  (concatenate 'vector
-               (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr:object-handle object))
-               (btr::pose->vector (btr:pose object))))
+  "The joint values and the pose of the articulated OBJECT, as two double vectors."
+  (cons (cram-native:robot-joints (btr:world-handle (btr:world object)) (btr:object-handle object))
+        (coerce (btr::pose->vector (btr:pose object)) '(simple-array double-float (*)))))
+
+(defun same-doubles-p (a b)
+  (declare (type (simple-array double-float (*)) a b) (optimize (speed 3) (safety 0)))
+  (and (= (length a) (length b))
+       (loop for i of-type fixnum below (length a) always (= (aref a i) (aref b i)))))
+
+(defun same-signature-p (a b)
+  "True when the environment signatures A and B (or NIL) are equal."
+  (and a b (same-doubles-p (car a) (car b)) (same-doubles-p (cdr a) (cdr b))))
 
 (defvar *motion-lock* (sb-thread:make-mutex :name "projection motion")
   "Held while a motion of the simulated robot runs, its TF update included: motions of
@@ -151,7 +160,7 @@ whole or not at all. Returns TRANSFORMER."
       (dolist (o (btr:objects world))
         (when (and (typep o 'btr:robot-object) (not (eq o robot)))
           (let ((signature (environment-signature o)))
-            (when (or force (not (equalp signature (gethash (btr:name o) signatures))))
+            (when (or force (not (same-signature-p signature (gethash (btr:name o) signatures))))
               (publish-object-links transformer o cram-tf:*fixed-frame* stamp :skip robot-frames)
               (setf (gethash (btr:name o) signatures) signature))))))
     transformer))
