@@ -59,12 +59,6 @@
           :grasp-failure (count-of "[(GRASP-FAILURE) WARN]")
           :perception-failure (count-of "[(PERCEPTION-FAILURE) WARN]"))))
 
-(defvar *pristine-world* nil
-  "RESET-PROJECTION's copy of the belief state BTW-TUT:INIT-PROJECTION made in this process
-(never the current world).")
-(defvar *pristine-settings* '()
-  "The settings BTW-TUT:INIT-PROJECTION made with *PRISTINE-WORLD*, a plist.")
-
 (defvar *preparsed-urdfs* '()
   "(text . robot) pairs: URDF texts and what CL-URDF:PARSE-URDF made of them when the saved
 core was built (SAVE-CORE in tools/build-core.lisp); empty in a process that loaded the systems.")
@@ -84,35 +78,13 @@ from the saved core (the same text gives the same robot) instead of parsing it a
           (sb-int:unencapsulate 'cl-urdf:parse-urdf 'preparsed)))))
 
 (defun reset-projection ()
-  "BTW-TUT:INIT-PROJECTION for many runs in one process (a campaign worker): the first call runs
-it and keeps a copy of its world; every call makes a new copy of that copy the current world,
-destroys the previous one, and restores the settings INIT-PROJECTION made (a copy costs about a
-fifth of a rebuild). Every run starts from the same copy, so a run's result does not depend on
-which runs this process made before it."
-  (let ((pristine *pristine-world*))
-    (cond ((and pristine (cram-native:world-alive-p (btr:world-handle pristine)))
-           (coe:clear-belief)
-           (destructuring-bind (&key robot-name robot-urdf environment base-frame) *pristine-settings*
-             (setf rob-int:*robot-name* robot-name
-                   rob-int:*robot-urdf* robot-urdf
-                   btr:*environment-name* environment
-                   cram-tf:*robot-base-frame* base-frame)))
-          (t
-           (call-with-preparsed-urdfs #'btw-tut:init-projection)
-           (setf pristine (btr:copy-world btr:*current-bullet-world*)
-                 *pristine-world* pristine
-                 *pristine-settings* (list :robot-name rob-int:*robot-name*
-                                           :robot-urdf rob-int:*robot-urdf*
-                                           :environment btr:*environment-name*
-                                           :base-frame cram-tf:*robot-base-frame*))))
-    (let ((old btr:*current-bullet-world*))
-      (setf btr:*current-bullet-world* (btr:copy-world pristine))
-      (when (and old (not (eq old pristine)) (typep old 'btr:bt-world))
-        (ignore-errors (btr:destroy-world old))))
-    (btr:debug-window btr:*current-bullet-world*)
-    (setf cram-tf:*tf-default-timeout* 2.0
-          prolog:*break-on-lisp-errors* t)
-    btr:*current-bullet-world*))
+  "BTW-TUT:INIT-PROJECTION for many runs in one process (a campaign worker). INIT-PROJECTION
+gives a copy of the belief state it built first, so every run starts from the same copy and a
+run's result does not depend on which runs this process made before it; the first call takes
+the URDFs parsed when the saved core was built."
+  (if (btw-tut::template-world-for btw-tut::*kitchen-urdf* btw-tut::*robot-urdf*)
+      (btw-tut:init-projection)
+      (call-with-preparsed-urdfs #'btw-tut:init-projection)))
 
 (defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*) reuse-world)
   "Run move-bottle with the bottle at POSE in a fresh belief state (with REUSE-WORLD, a copy of

@@ -28,9 +28,9 @@ everything, as on CRAM.")
   "Query → (database generation . every solution, or :NOT-PLAIN) of the robot fact queries.")
 
 (defun plain-facts-p (functor)
-  "True when every clause of FUNCTOR is a fact without a body (or a placeholder whose body is
-just FAIL): its answers depend on the database alone (no Lisp, no special variable, no world
-state)."
+  "True when every clause of FUNCTOR is a fact without a body (or a default clause whose body is
+just FAIL, as the robot interfaces declare their functors): its answers depend on the database
+alone (no Lisp, no special variable, no world state)."
   (let ((clauses (prolog:predicate-clauses functor)))
     (and clauses
          (every (lambda (c)

@@ -335,6 +335,18 @@ the beginning of a printed line, and the page's printer broke lines elsewhere th
   (expect (equal (cl-transforms-stamped:frame-id (s0-value "*base-pose-near-counter*")) "base_footprint")
           "*base-pose-near-counter* is not in base_footprint as the page writes it"))
 
+(defparameter *s0-placing-tail*
+  "      (let ((?drop-pose *final-object-destination*))
+        (exe:perform (desig:an action
+                               (type placing)
+                               (arm ?grasping-arm)
+                               (object ?perceived-bottle)
+                               (target (desig:a location
+                                                (pose ?drop-pose))))))
+      (pp-plans::park-arms :arm ?grasping-arm))))"
+  "The end of move-bottle the page's revisions share, which its diff tables leave in hunk gaps:
+placing the bottle at its destination and parking the arm.")
+
 (defparameter *s0-move-bottle-head*
   '((3 "(urdf-proj:" "  (urdf-proj:with-simulated-robot")
     (4 "(let ((?" "    (let ((?navigation-goal *base-pose-near-table*))")
@@ -376,18 +388,11 @@ the beginning of a printed line, and the page's printer broke lines elsewhere th
     (18 "(exe:" "        (exe:perform (desig:an action")
     (20 "(target (desig:a location"
      ;; 11 lines in the hunk gap, up to the closing tag
-     "                               (target (desig:a location
+     ,(concatenate 'string "                               (target (desig:a location
                                                 (pose ?nav-goal))))))
       (coe:on-event (make-instance 'cpoe:robot-state-changed))
       ;; Setting the bottle down on the counter
-      (let ((?drop-pose *final-object-destination*))
-        (exe:perform (desig:an action
-                               (type placing)
-                               (arm ?grasping-arm)
-                               (object ?perceived-bottle)
-                               (target (desig:a location
-                                                (pose ?drop-pose))))))
-      (pp-plans::park-arms :arm ?grasping-arm))))"))
+" *s0-placing-tail*)))
   "Completions of the first move-bottle: the cut lines and the hunk gaps.")
 
 (replay-block 10 (:name "move-bottle; then run, as the page says: the bottle ends on the island"
@@ -644,14 +649,7 @@ tutorial code (its last function), which fits the hunk counts line for line.")
     (21 "(exe:" "      (exe:perform (desig:a motion")
     (25 "(let ((?"
      ;; the rest of the block lies in the hunk gap, up to the closing tag
-     "      (let ((?drop-pose *final-object-destination*))
-        (exe:perform (desig:an action
-                               (type placing)
-                               (arm ?grasping-arm)
-                               (object ?perceived-bottle)
-                               (target (desig:a location
-                                                (pose ?drop-pose))))))
-      (pp-plans::park-arms :arm ?grasping-arm))))"))
+     ,*s0-placing-tail*))
   "Completions of the last move-bottle (with PICK-UP-OBJECT).")
 
 (replay-block 18 (:name "move-bottle with pick-up-object; run with the FORCED rod still there: the grasp recovery takes another grasp, the bottle ends on the island"
