@@ -553,6 +553,31 @@ bottles."
                (:file "pepper-plans")
                (:file "pepper-search")))
 
+(defsystem "cram-plans/cram-fetch-deliver-plans"
+  :description "The household action layer (FD-PLANS): navigating, turning towards, searching,
+fetching, delivering and transporting, with CRAM's retries and projection pre-checks."
+  :depends-on ("cram-plans/cram-mobile-pick-place-plans" "cram-plans/cram-location-costmap"
+               "cram-plans/cram-urdf-projection" "cram-plans/cram-object-knowledge")
+  :pathname "src/fetch-deliver/"
+  :serial t
+  :components ((:file "fd-package")
+               (:file "fd-occasions")
+               (:file "fd-navigation")
+               (:file "fd-search")
+               (:file "fd-fetch")
+               (:file "fd-deliver")
+               (:file "fd-transport")
+               (:file "fd-groundings")))
+
+(defsystem "cram-plans/cram-projection-demos"
+  :description "CRAM's household demo in projection (DEMOS): set a breakfast table from closed
+containers, then clean it up."
+  :depends-on ("cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-bullet-world-tutorial")
+  :pathname "src/demos/"
+  :serial t
+  :components ((:file "demos-package")
+               (:file "household-demo")))
+
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"

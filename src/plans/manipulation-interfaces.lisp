@@ -21,6 +21,8 @@
    ;; trajectories
    #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
    #:get-action-trajectory #:get-traj-poses-by-label
+   ;; where an object is (occasions of the household plans)
+   #:location-certain
    #:grasp-pose #:transform-pose-by))
 
 (in-package :cram-manipulation-interfaces)
