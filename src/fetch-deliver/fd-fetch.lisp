@@ -104,7 +104,9 @@ ALL-GRASPS in turn (5 retries); NIL lists let the picking-up action choose."
     (man-int:get-action-grasps type arm in-base)))
 
 (defun release-all-empty-grippers ()
-  "Open the grippers of the arms that hold nothing (after a misgrasp)."
+  "Open the grippers of the arms that hold nothing and park them (after a misgrasp), so that
+the empty hand is out of the camera's view when the object is perceived again."
   (let ((?arms (pp-plans::free-arms)))
     (when ?arms
-      (exe:perform (desig:an action (type releasing) (gripper ?arms))))))
+      (exe:perform (desig:an action (type releasing) (gripper ?arms)))
+      (exe:perform (desig:an action (type parking-arms) (arms ?arms))))))

@@ -6,28 +6,30 @@
 (defparameter *navigation-check-samples* 30
   "How many solutions of a navigation location the pre-check tries before it gives up.")
 
-(defun base-pose-free-p (pose)
-  "True when the robot, standing at POSE (map), touches nothing but the floor and what it holds.
-Checked in the belief state; the robot is put back where it was."
+(defun base-pose-collisions (pose)
+  "The names of what the robot, standing at POSE (map), touches but the floor and what it
+holds. Checked in the belief state; the robot is put back where it was."
   (let* ((robot (btr:get-robot-object))
          (before (btr:pose robot)))
     (unwind-protect
          (progn (setf (btr:pose robot) (pp-plans:pose-in-map pose))
-                (null (urdf-proj::robot-collisions :robot robot)))
+                (urdf-proj::robot-collisions :robot robot))
       (setf (btr:pose robot) before))))
 
 (defun check-navigating-collisions (location)
   "The projection pre-check of navigating: the first of up to *NAVIGATION-CHECK-SAMPLES*
-solutions of LOCATION (a location designator) at which the robot is free of collisions; the
-designator is advanced to it. Signals NAVIGATION-GOAL-IN-COLLISION when none is."
+solutions of LOCATION (a location designator) at which the robot is free of collisions (the
+designator of that solution, equated with LOCATION). Signals NAVIGATION-GOAL-IN-COLLISION when none is."
   (let ((current location))
     (loop repeat *navigation-check-samples*
           while current
           do (let ((pose (handler-case (desig:reference current)
                            (desig:designator-error () (return)))))
-               (when (base-pose-free-p pose)
-                 (unless (eq current location) (desig:equate location current))
-                 (return-from check-navigating-collisions current))
+               (let ((hits (base-pose-collisions pose)))
+                 (unless hits
+                   (return-from check-navigating-collisions current))
+                 (log-fd :warn 'navigate "Navigation goal ~a collides with ~{~s~^, ~}; trying ~
+                                          the next solution." (urdf-proj::pose-summary pose) hits))
                (setf current (desig:next-solution current))))
     (cpl:fail 'common-fail:navigation-goal-in-collision
               :description (format nil "No solution of ~a is free of collisions for the robot."
