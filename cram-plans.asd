@@ -240,7 +240,8 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description"
                "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
-               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-household-knowledge"
+               "cram-plans/cram-mobile-pick-place-plans"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
                "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
                (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
@@ -512,11 +513,25 @@ grasps, gripper openings and efforts, pick and place trajectories."
   :components ((:file "manipulation-interfaces")
                (:file "object-knowledge")))
 
+(defsystem "cram-plans/cram-household-knowledge"
+  :description "Household object knowledge (OBJECTS, MAN-INT): the kitchen's object types,
+their grasps with pregrasp and lift per location type, carry configurations, and where objects
+are likely to be and where they go per context (GET-OBJECT-LIKELY-LOCATION,
+GET-OBJECT-DESTINATION)."
+  :depends-on ("cram-plans/cram-object-knowledge" "cram-plans/cram-designators" "cram-plans/cl-transforms")
+  :pathname "src/object-knowledge/"
+  :serial t
+  :components ((:file "household-types")
+               (:file "household-grasps")
+               (:file "knowledge-dispatch")
+               (:file "household-locations")))
+
 (defsystem "cram-plans/cram-mobile-pick-place-plans"
   :description "Action groundings and plans of mobile pick and place (PP-PLANS)."
   :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms" "cram-plans/cram-designators"
                "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-executive"
-               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge")
+               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge"
+               "cram-plans/cram-household-knowledge")
   :pathname "src/plans/"
   :serial t
   :components ((:file "pp-package")
