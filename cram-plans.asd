@@ -572,12 +572,13 @@ bottles."
   :description "The household action layer (FD-PLANS): navigating, turning towards, searching,
 fetching, delivering and transporting, with CRAM's retries and projection pre-checks."
   :depends-on ("cram-plans/cram-mobile-pick-place-plans" "cram-plans/cram-location-costmap"
-               "cram-plans/cram-urdf-projection" "cram-plans/cram-object-knowledge")
+               "cram-plans/cram-urdf-projection" "cram-plans/cram-household-knowledge")
   :pathname "src/fetch-deliver/"
   :serial t
   :components ((:file "fd-package")
                (:file "fd-occasions")
                (:file "fd-navigation")
+               (:file "fd-prechecks")
                (:file "fd-search")
                (:file "fd-fetch")
                (:file "fd-deliver")

@@ -93,6 +93,7 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
                             :rethrow-failure 'common-fail:object-undeliverable))))
                   (let ((?look ?target))
                     (exe:perform (desig:an action (type turning-towards) (target ?look))))
+                  (setf ?target (check-placing-collisions ?object ?arm ?target))
                   (unless (target-stable-p ?target)
                     (check-placing-pose-stability ?object ?target))
                   (handler-case

@@ -65,7 +65,8 @@ Returns the object designator; FETCHING-FAILED when all are used up."
 
 (defun pick-up-with-alternatives (object all-arms all-grasps)
   "Pick up OBJECT with the arms of ALL-ARMS in turn (1 retry) and for each the grasps of
-ALL-GRASPS in turn (5 retries); NIL lists let the picking-up action choose."
+ALL-GRASPS in turn (5 retries; NIL: the object type's grasps for the arm). Each grasp is first
+tried in the belief state (CHECK-PICKING-UP-COLLISIONS), so an unreachable one moves nothing."
   (let* ((arms (or all-arms (pp-plans::free-arms))) (?arm (first arms)))
     (cpl:with-retry-counters ((arm-retries 1))
       (cpl:with-failure-handling
@@ -89,6 +90,8 @@ ALL-GRASPS in turn (5 retries); NIL lists let the picking-up action choose."
                        (:error-object-or-string (format nil "Picking up failed: ~a.~%Next." e)
                         :warning-namespace (fd-plans fetch))
                      (setf ?grasp (first grasps)))))
+              (check-picking-up-collisions object :arms (list ?arm)
+                                                  :grasps (and ?grasp (list ?grasp)))
               (let ((?object object))
                 (exe:perform (desig:an action (type picking-up)
                                        (desig:when ?arm (arm ?arm))
