@@ -18,6 +18,8 @@
    #:get-object-type-gripping-effort #:get-object-type-gripper-opening
    #:define-object-type-gripping #:object-rotationally-symmetric-p
    #:manipulation-knowledge-error
+   ;; containers (defined by cram-urdf-environment-manipulation)
+   #:get-container-opening-distance #:object-is-a-container
    ;; trajectories
    #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
    #:get-action-trajectory #:get-traj-poses-by-label
