@@ -40,12 +40,26 @@ pose of the opening or closing segment."
      (list (first (man-int:get-traj-poses-by-label trajectory :grasping))
            (first moving) (nth (floor (length moving) 2) moving) (car (last moving))))))
 
+(defparameter *reach-base-offsets* '(0d0 0.1d0 -0.1d0 0.2d0 -0.2d0)
+  "Shifts (metres, along the base's x axis) the arm motions may make the base take to reach a
+pose, as MOVE-TCP does with its base offsets.")
+
 (defun poses-reachable-p (arm poses robot)
-  "True when ARM of ROBOT has IK solutions for every tool pose of POSES from where it stands."
-  (every (lambda (pose)
-           (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
-                             :robot robot :max-restarts *reachability-ik-restarts*))
-         poses))
+  "True when ARM of ROBOT has IK solutions for every tool pose of POSES from where it stands, or
+from the base shifted by one of *REACH-BASE-OFFSETS*."
+  (let ((base (btr:pose robot)))
+    (unwind-protect
+         (every (lambda (pose)
+                  (some (lambda (dx)
+                          (setf (btr:pose robot)
+                                (translate-pose base (cl-transforms:rotate
+                                                      (cl-transforms:orientation base)
+                                                      (cl-transforms:make-3d-vector dx 0 0))))
+                          (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
+                                            :robot robot :max-restarts *reachability-ik-restarts*))
+                        *reach-base-offsets*))
+                poses)
+      (setf (btr:pose robot) base))))
 
 (defun reachable-grasp (container action arm amount grasps)
   "The first of GRASPS whose trajectory ARM reaches from the robot's current base, or NIL."

@@ -131,11 +131,10 @@ unknown (listing the container links), or the link is no container."
                    (mapcar #'link-name->urdf-name (container-links environment))))
       (let ((handle (handle-link-of link))
             (joint (connecting-joint-of link)))
-        (unless (and handle joint (not (handle-name-p link)))
+        (unless (container-link-p link)
           (env-error "URDF-NAME ~s: the link ~s of ~s is no container (~:[it has no handle below ~
-                      it~;~:[no joint moves it~;it is a handle~]~]). Its container links are: ~
-                      ~{~(~a~)~^, ~}."
-                     urdf-name link-name (btr:name environment) handle (not (handle-name-p link))
+                      it~;no joint of its own moves it~]). Its container links are: ~{~(~a~)~^, ~}."
+                     urdf-name link-name (btr:name environment) handle
                      (mapcar #'link-name->urdf-name (container-links environment))))
         (when (and type (keywordp type) (not (container-type-p type)))
           (env-error "The object type ~s of ~s is no container type: expected :CONTAINER or a ~

@@ -12,7 +12,7 @@
    ;; errors
    #:environment-manipulation-error
    ;; containers of an environment
-   #:container #:find-container #:container-environment #:container-link #:container-handle-link
+   #:container #:find-container #:container-environment #:container-link #:container-handle #:container-name
    #:container-joint #:container-joint-type #:container-links #:container-joint-state
    #:container-joint-limits #:container-opening-amount #:container-default-target
    #:container-designator-container
