@@ -596,7 +596,21 @@ containers, then clean it up."
   :pathname "src/demos/"
   :serial t
   :components ((:file "demos-package")
+               (:file "varied-kitchen")
                (:file "household-demo")))
+
+(defsystem "cram-plans/tests/fetch-deliver"
+  :description "Searching, fetching, delivering and transporting (FD-PLANS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-fetch-deliver-plans"
+               "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :components ((:file "fetch-deliver-tests")))
+
+(defsystem "cram-plans/tests/household-demo"
+  :description "CRAM's household demo in projection (DEMOS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-projection-demos")
+  :pathname "tests/"
+  :components ((:file "household-demo-tests")))
 
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")

@@ -92,6 +92,10 @@ parallel; failures are ignored."
          (desig:an action (type transporting) (object (desig:an object (type ?type)))
                    (context ?context))))))
 
+(defvar *after-setting-hook* nil
+  "A function called with no arguments when the table is set, before cleaning starts (NIL:
+none); the tests record the table state with it.")
+
 (defun household-demo (&key (object-list *demo-object-types*) varied-kitchen)
   "CRAM's household demo in projection: initialize the kitchen, spawn OBJECT-LIST (types, in
 the order the table is set; the bowl must come before spoon and cup) in their closed
@@ -113,6 +117,7 @@ caught. Returns the object list."
       (park-robot)
       (dolist (type object-list)
         (transport type :table-setting))
+      (when *after-setting-hook* (funcall *after-setting-hook*))
       (dolist (type (reverse object-list))
         (transport type :table-cleaning))
       (park-robot)))
