@@ -19,10 +19,10 @@
    #:define-object-type-gripping #:object-rotationally-symmetric-p
    #:manipulation-knowledge-error
    #:get-object-type-lift-offsets #:get-object-type-carry-config #:define-object-type-carry-config
-   #:grasp-location-type-variant-p
+   #:grasp-location-variant-p
    ;; object knowledge in context (generics, methods in CRAM-OBJECT-KNOWLEDGE)
    #:get-object-likely-location #:get-object-destination #:get-object-location-type
-   #:most-specific-type-method #:no-object-knowledge
+   #:most-specific-type-method #:no-object-knowledge #:requested-object-type
    ;; trajectories
    #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
    #:get-action-trajectory #:get-traj-poses-by-label
