@@ -151,6 +151,10 @@
                (:file "costmap-belief")
                (:file "costmap-targets")
                (:file "costmap-designators")
+               (:file "costmap-household-bodies")
+               (:file "costmap-household-regions")
+               (:file "costmap-household-relations")
+               (:file "costmap-household-robot")
                (:file "costmap-heatmap")))
 
 (defsystem "cram-plans/cram-pr2-description"
@@ -477,7 +481,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/environment-manipulation"))
+               "cram-plans/tests/environment-manipulation" "cram-plans/tests/household"
+               "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -611,6 +616,14 @@ containers, then clean it up."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-projection-demos")
   :pathname "tests/"
   :components ((:file "household-demo-tests")))
+
+(defsystem "cram-plans/tests/household"
+  :description "Household object knowledge and location designators in the kitchen."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "household-knowledge-tests")
+               (:file "household-locations-tests")))
 
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")

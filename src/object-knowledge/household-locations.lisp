@@ -16,7 +16,9 @@ properties ((key value) ...) appended."
   "A location designator of PROPERTIES ((key value) ...), NIL entries left out."
   (desig:make-designator :location (remove nil properties)))
 
-(defun for-type (type) (desig:make-designator :object `((:type ,type))))
+(defun for-type (type)
+  "An object designator of the type the knowledge call asked about (TYPE or its subtype)."
+  (desig:make-designator :object `((:type ,(man-int:requested-object-type type)))))
 
 (defun drawer-back (urdf-name environment &rest more)
   "In the drawer URDF-NAME, at its back half (towards the handle)."

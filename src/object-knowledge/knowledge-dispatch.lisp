@@ -38,6 +38,15 @@ that type and applicable to ENVIRONMENT, HUMAN and CONTEXT; NIL when there is no
                    (compute-applicable-methods generic (list type environment human context)))
           return type))
 
+(defvar *requested-object-type* nil
+  "The object type a GET-OBJECT-LIKELY-LOCATION or GET-OBJECT-DESTINATION call asked about,
+while a method of one of its supertypes answers it.")
+
+(defun requested-object-type (type)
+  "The object type the current knowledge call asked about (e.g. :SPOON while the :CUTLERY
+method answers), else TYPE."
+  (or *requested-object-type* type))
+
 (defun call-with-type-dispatch (generic name object-type environment human context)
   (check-knowledge-arguments name object-type context)
   (let ((type (most-specific-type-method generic object-type environment human context)))
@@ -47,7 +56,8 @@ that type and applicable to ENVIRONMENT, HUMAN and CONTEXT; NIL when there is no
                               in the context ~s; types known in that context: ~{~s~^, ~}."
              :format-arguments (list name object-type (rest (object-type-supertypes object-type))
                                      context (types-with-methods generic context))))
-    (funcall generic type environment human context)))
+    (let ((*requested-object-type* object-type))
+      (funcall generic type environment human context))))
 
 (defgeneric get-object-likely-location (object-type environment human context)
   (:documentation "A location designator for where an object of OBJECT-TYPE (a keyword) is

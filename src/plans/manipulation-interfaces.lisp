@@ -19,10 +19,10 @@
    #:define-object-type-gripping #:object-rotationally-symmetric-p
    #:manipulation-knowledge-error
    #:get-object-type-lift-offsets #:get-object-type-carry-config #:define-object-type-carry-config
-   #:grasp-location-type-variant-p
+   #:grasp-location-variant-p
    ;; object knowledge in context (generics, methods in CRAM-OBJECT-KNOWLEDGE)
    #:get-object-likely-location #:get-object-destination #:get-object-location-type
-   #:most-specific-type-method #:no-object-knowledge
+   #:most-specific-type-method #:no-object-knowledge #:requested-object-type
    ;; containers (defined by cram-urdf-environment-manipulation)
    #:get-container-opening-distance #:object-is-a-container
    ;; trajectories
