@@ -40,12 +40,12 @@ the object is dropped at the sink and the failure propagates."
   (accessing-action search-location arms)
   (let* ((?object object) (?search-location search-location)
          (?search-robot search-robot-location)
-         (?perceived (or (perform-with-goal
+         (?perceived (if (object-held-p object)
+                         (desig:current-desig object)
+                         (exe:perform
                           (desig:an action (type searching) (object ?object)
                                     (location ?search-location)
-                                    (desig:when ?search-robot (robot-location ?search-robot)))
-                          `(cpoe:object-in-hand ,object))
-                         (desig:current-desig object)))
+                                    (desig:when ?search-robot (robot-location ?search-robot))))))
          (?arms arms) (?grasps grasps) (?fetch-robot fetch-robot-location))
     (perform-with-goal (desig:an action (type fetching) (object ?perceived)
                                  (desig:when ?arms (arms ?arms))
