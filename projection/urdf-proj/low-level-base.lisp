@@ -9,6 +9,10 @@
   "The names of the objects the robot's hands are closing in on (set by the picking-up plan
 around its grasping step): contacts of the hand links with them are the grasp, not collisions.")
 
+(defvar *placed-objects* '()
+  "The names of the held objects being put down (set by the placing plan around its putting
+step): their contacts with the surface they are put on are the placing, not collisions.")
+
 (defvar *grasp-container-links* '()
   "The environment links the hands may touch while closing in on *GRASPED-OBJECTS*: the
 container the object lies in (its board, walls and bottom).")
@@ -28,7 +32,8 @@ the environment OTHER that holds it (*GRASP-CONTAINER-LINKS*)."
   "The names of the objects the robot collides with: contacts of its links (except the links
 in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
 with anything but the robot and each other. Contacts of the robot with the floor (static
-planes) and of its hands with the objects being grasped (*GRASPED-OBJECTS*) do not count."
+planes), of its hands with the objects being grasped (*GRASPED-OBJECTS*) and of the objects
+being put down (*PLACED-OBJECTS*) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
          (hits '()))
     (loop for (a la b lb) in (btr::contact-records world robot)
@@ -42,7 +47,7 @@ planes) and of its hands with the objects being grasped (*GRASPED-OBJECTS*) do n
             do (pushnew (btr:name other) hits))
     (dolist (name attached)
       (let ((o (btr:object world name)))
-        (when o
+        (when (and o (not (member name *placed-objects*)))
           (loop for (a nil b nil) in (btr::contact-records world o)
                 for other = (if (eq a o) b a)
                 unless (or (eq other robot) (member (btr:name other) attached))

@@ -150,6 +150,15 @@ grasp, not a collision. Set globally, as motions run in process-module threads."
                urdf-proj:*grasp-container-links*
                (nthcdr (length ,links) urdf-proj:*grasp-container-links*))))))
 
+(defmacro with-object-being-placed ((object) &body body)
+  "Run BODY while OBJECT, held, may touch what it is put on (URDF-PROJ:*PLACED-OBJECTS*). Set
+globally, as motions run in process-module threads."
+  (let ((name (gensym "NAME")))
+    `(let ((,name (object-designator-name ,object)))
+       (unwind-protect
+            (progn (push ,name urdf-proj:*placed-objects*) ,@body)
+         (setf urdf-proj:*placed-objects* (remove ,name urdf-proj:*placed-objects* :count 1))))))
+
 (defun pick-up (&key arm grasp object gripper-opening effort trajectory look-pose
                 &allow-other-keys)
   "Pick up OBJECT with ARM using GRASP along TRAJECTORY (MAN-INT segments :REACHING,
@@ -343,8 +352,9 @@ where the object comes to rest on the surface below it, record its new location,
     (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
                         :log-tag 'place)
     (log-pp 'place "Putting")
-    (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
-                        :log-tag 'place)
+    (with-object-being-placed (object)
+      (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
+                          :log-tag 'place))
     (log-pp 'place "Opening gripper")
     (exe:perform (desig:an action (type releasing) (gripper ?arm)))
     (log-pp 'place "Retract grasp in knowledge base")
