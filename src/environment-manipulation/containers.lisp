@@ -142,7 +142,9 @@ unknown (listing the container links), or the link is no container."
                      type urdf-name))
         (let ((joint-type (if (eq (cl-urdf:joint-type joint) :prismatic) :prismatic :revolute)))
           (%make-container :environment environment
-                           :name (if (symbolp urdf-name) urdf-name (link-name->urdf-name urdf-name))
+                           :name (if (symbolp urdf-name)
+                                     (intern (symbol-name urdf-name) :keyword)
+                                     (link-name->urdf-name urdf-name))
                            :link link-name :handle (cl-urdf:name handle)
                            :joint (cl-urdf:name joint) :joint-type joint-type
                            :lower (d (or (cl-urdf:lower joint) (- pi)))
