@@ -244,7 +244,8 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-urdf-environment-manipulation"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
                "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
-               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
+               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")
+               (:feature :cram-plans-roslisp "cram-plans/cram-urdf-environment-manipulation/ros")))
 
 (defsystem "cram-plans/cram-ros-pms/package"
   :description "The light part of the robot process modules: package CRAM-ROS-PMS (PR2-PMS),
@@ -583,6 +584,14 @@ environment, container events and attachments in the belief state, the container
                (:file "plans")
                (:file "access-seal")
                (:file "groundings")))
+
+(defsystem "cram-plans/cram-urdf-environment-manipulation/ros"
+  :description "The environment's joint states on kitchen/cram_joint_states after container
+events, while a ROS node runs."
+  :depends-on ("cram-plans/cram-urdf-environment-manipulation" "cram-plans/roslisp-utilities/ros"
+               "roslisp" "sensor_msgs-msg" "std_msgs-msg")
+  :pathname "src/environment-manipulation/"
+  :components ((:file "ros-joint-states")))
 
 (defsystem "cram-plans/tests/environment-manipulation"
   :description "Drawers and doors: grounding, distances, trajectories, the belief state, goals,
