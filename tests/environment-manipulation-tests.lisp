@@ -347,3 +347,27 @@ muffled; returns its value (or the error) and the log text."
                   "SIDEWAYS"))
     (fails-with (lambda () (exe:perform (desig:an action (type accessing) (location 42))))
                 "42")))
+
+(defun look-at-point (x y z)
+  (let ((?pose (cl-transforms-stamped:make-pose-stamped "map" 0d0 (cl-transforms:make-3d-vector x y z)
+                                                        (cl-transforms:make-identity-rotation))))
+    (run-logged (lambda () (exe:perform (desig:a motion (type looking) (target (desig:a location (pose ?pose)))))))))
+
+(test nothing-in-a-closed-drawer-is-visible
+  (btw-tut:init-projection)
+  (spawn-spoon)
+  (setf (btr:pose (btr:get-robot-object))
+        (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.3 0.9 0) (cl-transforms:make-identity-rotation)))
+  (look-at-point 1.2 0.9 0.7)
+  (multiple-value-bind (fraction occluders) (btr:visibility-fraction (btr:camera-pose :pr2) 'spoon-1)
+    (is (< fraction 0.05) "the spoon in the closed drawer is seen: ~a" fraction)
+    (is (member :iai-kitchen occluders)))
+  (is (null (prolog:prolog '(and (btr:bullet-world ?w) (btr:visible ?w :pr2 spoon-1)))))
+  ;; open, the drawer shows it
+  (coe:on-event (make-instance 'cpoe:container-opening-event :environment-name :iai-kitchen
+                               :joint-name "sink_area_left_upper_drawer_main_joint" :distance 0.48))
+  (setf (btr:pose (btr:get-robot-object))
+        (cl-transforms:make-pose (cl-transforms:make-3d-vector -0.2 0.9 0) (cl-transforms:make-identity-rotation)))
+  (let ((spoon (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* 'spoon-1)))))
+    (look-at-point (cl-transforms:x spoon) (cl-transforms:y spoon) (cl-transforms:z spoon)))
+  (is (> (btr:visibility-fraction (btr:camera-pose :pr2) 'spoon-1) 0.5)))
