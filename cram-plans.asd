@@ -476,7 +476,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/environment-manipulation"))
+               "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -600,3 +600,10 @@ attachments and the plans of opening, closing, accessing and sealing."
                "cram-plans/cram-urdf-environment-manipulation")
   :pathname "tests/"
   :components ((:file "environment-manipulation-tests")))
+
+(defsystem "cram-plans/tests/environment-manipulation-ros"
+  :description "Environment manipulation with a ROS node: the kitchen's joint states on ROS."
+  :depends-on ("cram-plans/tests/environment-manipulation" "cram-plans/tests/ros"
+               "cram-plans/cram-urdf-environment-manipulation/ros")
+  :pathname "tests/"
+  :components ((:file "environment-manipulation-ros-tests")))

@@ -58,7 +58,8 @@ and clamped to the joint's limits (with a warning when beyond), then run
 ;;; ---- objects and environment links ----------------------------------------------------------
 
 (defun event-object-name (event)
-  (or (and (typep event 'cpoe::object-attachment-event) (cpoe:event-object-name event))
+  (or (and (typep event '(or cpoe:object-attached-robot cpoe:object-detached-robot))
+           (cpoe:event-object-name event))
       (let ((designator (cpoe:event-object-designator event)))
         (and designator
              (or (desig:desig-prop-value (desig:current-desig designator) :name)
