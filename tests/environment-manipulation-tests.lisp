@@ -371,3 +371,15 @@ muffled; returns its value (or the error) and the log text."
   (let ((spoon (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* 'spoon-1)))))
     (look-at-point (cl-transforms:x spoon) (cl-transforms:y spoon) (cl-transforms:z spoon)))
   (is (> (btr:visibility-fraction (btr:camera-pose :pr2) 'spoon-1) 0.5)))
+
+(test placing-attaches-to-the-surface-below
+  ;; the placing plan of move-bottle puts the bottle on the island: it is attached there, and a
+  ;; new grasp of it detaches it again
+  (btw-tut:init-projection)
+  (let ((value (let ((cpl:*log-stream* (make-broadcast-stream)))
+                 (handler-bind ((warning #'muffle-warning))
+                   (handler-case (btw-tut:move-bottle) (error (e) e) (cpl:plan-failure (e) e))))))
+    (is (typep value 'desig:object-designator) "move-bottle failed: ~a" value))
+  (is (equal '("kitchen_island_surface") (btr:object-attached (kitchen) 'btw-tut::bottle-1)))
+  (coe:on-event (make-instance 'cpoe:object-attached-robot :object-name 'btw-tut::bottle-1 :arm :left))
+  (is (null (btr:object-attached (kitchen) 'btw-tut::bottle-1))))
