@@ -597,7 +597,7 @@ events, while a ROS node runs."
   :description "Drawers and doors: grounding, distances, trajectories, the belief state, goals,
 attachments and the plans of opening, closing, accessing and sealing."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial"
-               "cram-plans/cram-urdf-environment-manipulation")
+               "cram-plans/cram-urdf-environment-manipulation" "cram-plans/replay")
   :pathname "tests/"
   :components ((:file "environment-manipulation-tests")))
 

@@ -383,3 +383,22 @@ muffled; returns its value (or the error) and the log text."
   (is (equal '("kitchen_island_surface") (btr:object-attached (kitchen) 'btw-tut::bottle-1)))
   (coe:on-event (make-instance 'cpoe:object-attached-robot :object-name 'btw-tut::bottle-1 :arm :left))
   (is (null (btr:object-attached (kitchen) 'btw-tut::bottle-1))))
+
+(test task-tree-and-replay-show-the-drawer
+  (btw-tut:init-projection)
+  (cram-viewer:clear-runs)
+  (let ((value (run-logged (open-drawer-form 0.3))))
+    (is (not (typep value 'error)) "opening failed: ~a" value))
+  ;; the task tree holds the opening action, its pulling and the plan
+  (flet ((named (name) (cpl:find-task-tree-nodes (lambda (n) (eq name (cpl:node-name n))))))
+    (is (named :opening))
+    (is (named :pulling))
+    (is (named 'env-man:manipulate-container)))
+  ;; the recorded replay: between its first and its last step one kitchen joint moved, by 0.3
+  (let* ((json (cram-viewer:run-json (cram-viewer:last-run)))
+         (steps (gethash "steps" json))
+         (joints (mapcar (lambda (step) (gethash "joints" (gethash "iai-kitchen" (gethash "state" step))))
+                         (list (first steps) (car (last steps)))))
+         (moved (remove-if (lambda (d) (< (abs d) 1d-6)) (mapcar #'- (second joints) (first joints)))))
+    (is (= 1 (length moved)) "kitchen joints that moved: ~a" moved)
+    (is (< (abs (- 0.3 (first moved))) 1d-4))))
