@@ -402,3 +402,53 @@ muffled; returns its value (or the error) and the log text."
          (moved (remove-if (lambda (d) (< (abs d) 1d-6)) (mapcar #'- (second joints) (first joints)))))
     (is (= 1 (length moved)) "kitchen joints that moved: ~a" moved)
     (is (< (abs (- 0.3 (first moved))) 1d-4))))
+
+(test accessing-opens-the-outer-container-first-and-sealing-closes-it-last
+  ;; the dishwasher tray lies in the dishwasher: accessing (above tray) opens the door (to 0.9
+  ;; rad), then the tray; sealing closes the tray, then the door
+  (btw-tut:init-projection)
+  (let* ((?dishwasher (drawer-designator :sink-area-dish-washer-main :dishwasher))
+         (?tray (desig:make-designator :object `((:type :drawer) (:urdf-name :sink-area-dish-washer-tray-bottom)
+                                                 (:part-of :iai-kitchen)
+                                                 (:location ,(desig:make-designator :location `((:in ,?dishwasher)))))))
+         (?above (desig:make-designator :location `((:above ,?tray))))
+         (states '()))
+    (flet ((record (environment joint-states)
+             (declare (ignore environment))
+             (push (list (cdr (assoc "sink_area_dish_washer_door_joint" joint-states :test #'string=))
+                         (cdr (assoc "sink_area_dish_washer_tray_main" joint-states :test #'string=)))
+                   states)))
+      (push #'record env-man:*environment-joint-state-hooks*)
+      (unwind-protect
+           (progn
+             (is (not (coe:holds `(cpoe:location-accessible ,?above))))
+             (let ((value (run-logged (lambda () (exe:perform (desig:an action (type accessing) (location ?above)))))))
+               (is (not (typep value 'error)) "accessing failed: ~a" value))
+             (is (coe:holds `(cpoe:location-accessible ,?above)))
+             (let ((value (run-logged (lambda () (exe:perform (desig:an action (type sealing) (location ?above)))))))
+               (is (not (typep value 'error)) "sealing failed: ~a" value))
+             (is (coe:holds `(cpoe:location-reset ,?above))))
+        (setf env-man:*environment-joint-state-hooks*
+              (remove #'record env-man:*environment-joint-state-hooks*))))
+    (is (equal '((0.9d0 0d0) (0.9d0 0.48d0) (0.9d0 0d0) (0d0 0d0)) (reverse states))
+        "door and tray states after each event: ~a" (reverse states))))
+
+(test handle-grasps-are-tried-in-turn
+  (btw-tut:init-projection)
+  (let ((drawer (container :sink-area-left-upper-drawer-main))
+        (fridge (container :iai-fridge-door)))
+    ;; the bar of a drawer handle is horizontal, the fridge's vertical: the fitting grasp first
+    (is (eq :front (first (env-man::container-grasps drawer))))
+    (is (eq :front-along-y (first (env-man::container-grasps fridge))))
+    (is (= 5 (length (env-man::container-grasps drawer))))
+    (signals env-man:environment-manipulation-error (env-man::container-grasps drawer :sideways)))
+  ;; given (grasps (back front)), the robot reaches with the one that works from where it stands
+  (multiple-value-bind (value log)
+      (run-logged (lambda ()
+                    (let ((?drawer (drawer-designator :sink-area-left-upper-drawer-main)))
+                      (exe:perform (desig:an action (type opening) (arm right) (grasps (back front))
+                                             (object ?drawer) (distance 0.2))))))
+    (is (not (typep value 'error)) "opening failed: ~a" value)
+    (is (search "reaching with grasp front" log))
+    (is (not (search "reaching with grasp back" log))))
+  (is (< (abs (- 0.2 (joint "sink_area_left_upper_drawer_main_joint"))) 1d-4)))
