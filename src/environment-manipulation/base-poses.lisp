@@ -46,20 +46,32 @@ pose, as MOVE-TCP does with its base offsets.")
 
 (defun poses-reachable-p (arm poses robot)
   "True when ARM of ROBOT has IK solutions for every tool pose of POSES from where it stands, or
-from the base shifted by one of *REACH-BASE-OFFSETS*."
-  (let ((base (btr:pose robot)))
+from the base shifted by one of *REACH-BASE-OFFSETS*, at one torso height for all of them (the
+current one first, then the others MOVE-TCP would try)."
+  (let* ((base (btr:pose robot))
+         (torso (urdf-proj:torso-joint))
+         (torso-value (and torso (member torso (btr:joint-names robot) :test #'string=)
+                           (btr:joint-state robot torso)))
+         (heights (or (and torso-value (urdf-proj::torso-candidates robot nil)) (list nil))))
     (unwind-protect
-         (every (lambda (pose)
-                  (some (lambda (dx)
-                          (setf (btr:pose robot)
-                                (translate-pose base (cl-transforms:rotate
-                                                      (cl-transforms:orientation base)
-                                                      (cl-transforms:make-3d-vector dx 0 0))))
-                          (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
-                                            :robot robot :max-restarts *reachability-ik-restarts*))
-                        *reach-base-offsets*))
-                poses)
-      (setf (btr:pose robot) base))))
+         (some (lambda (height)
+                 (when height
+                   (btr:set-robot-state-from-joints (list (list torso height)) robot))
+                 (every (lambda (pose)
+                          (some (lambda (dx)
+                                  (setf (btr:pose robot)
+                                        (translate-pose base (cl-transforms:rotate
+                                                              (cl-transforms:orientation base)
+                                                              (cl-transforms:make-3d-vector dx 0 0))))
+                                  (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
+                                                    :robot robot
+                                                    :max-restarts *reachability-ik-restarts*))
+                                *reach-base-offsets*))
+                        poses))
+               heights)
+      (setf (btr:pose robot) base)
+      (when torso-value
+        (btr:set-robot-state-from-joints (list (list torso torso-value)) robot)))))
 
 (defparameter *reachability-cache-size* 256
   "The most answers of REACHABLE-GRASP kept (the cache is emptied when it is full).")
