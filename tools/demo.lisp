@@ -11,6 +11,7 @@
     (asdf:load-asd (truename (merge-pathnames "cram-plans.asd" root)))
     (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
     (asdf:load-system "cram-plans/cram-pepper-demo")
+    (asdf:load-system "cram-plans/cram-projection-demos")
     (asdf:load-system "cram-plans/replay")   ; runs recorded; --out writes replay.html
     (asdf:load-system "yason")
     (require :sb-posix)))
@@ -152,4 +153,5 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
 
 ;; one compilation unit: runner.lisp calls functions it defines further down
 (with-compilation-unit ()
-  (load (merge-pathnames "runner.lisp" *tools-directory*)))
+  (load (merge-pathnames "runner.lisp" *tools-directory*))
+  (load (merge-pathnames "household-run.lisp" *tools-directory*)))

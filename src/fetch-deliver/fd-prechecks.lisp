@@ -100,8 +100,10 @@ the belief state; the robot is put back."
                   (joints (urdf-proj:neck-joints))
                   (camera (urdf-proj:camera-frame robot)))
              (setf (btr:pose robot) (pp-plans:pose-in-map pose))
-             (let ((values (urdf-proj::neck-angles-towards robot joints camera
-                                                             (cl-transforms:origin (btr:pose o)))))
+             ;; the neck solver passes through values beyond the limits: no warnings of those
+             (let ((values (handler-bind ((warning #'muffle-warning))
+                             (urdf-proj::neck-angles-towards robot joints camera
+                                                             (cl-transforms:origin (btr:pose o))))))
                (btr:set-robot-state-from-joints
                 (mapcar (lambda (j v) (list j (urdf-proj::clamp-joint robot j v))) joints values)
                 robot))
