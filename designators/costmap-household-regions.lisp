@@ -37,7 +37,7 @@
 (level L) inside CONTAINER the box of that level at its top."
   (let ((body (designator-body container "IN")))
     (box-region-costmap designator body 'in-box
-                        (if (desig:desig-prop-value container :level)
+                        (if (designator-level container)
                             (cl-transforms:z (body-hi body))
                             (+ (cl-transforms:z (body-lo body)) *in-height-above-bottom*)))))
 
@@ -68,12 +68,13 @@
                          (if (listp sides) sides (list sides)))))
     (when (null entries)
       (error "Location designator ~a: (side ~s) names no side." designator sides))
-    (lambda (x y)
-      (multiple-value-bind (lx ly) (body-local-point body x y)
-        (if (every (lambda (e) (let ((v (if (eq (second e) :x) lx ly)))
-                                 (if (eq (third e) '<) (< v 0) (> v 0))))
-                   entries)
-            1d0 0d0)))))
+    (let ((local (body-local-function body)))
+      (lambda (x y)
+        (multiple-value-bind (lx ly) (funcall local x y)
+          (if (every (lambda (e) (let ((v (if (eq (second e) :x) lx ly)))
+                                   (if (eq (third e) '<) (< v 0) (> v 0))))
+                     entries)
+              1d0 0d0))))))
 
 (defun side-costmap (designator sides)
   "(side S) or (side (S1 S2)): the half-planes of the reference body's frame; front x < 0,
@@ -169,11 +170,12 @@ places within *SLOT-DEVIATION* of their centres."
                            (slot-points phx phy :x count (first sizes) (second sizes))
                            (slot-points phy phx :y count (first sizes) (second sizes))))
                (d2 (* *slot-deviation* *slot-deviation*))
+               (local (body-local-function body))
                (costmap (make-location-costmap)))
           (register-cost-function
            costmap
            (lambda (x y)
-             (multiple-value-bind (lx ly) (body-local-point body x y)
+             (multiple-value-bind (lx ly) (funcall local x y)
                (let ((px (+ lx shift-x)) (py (+ ly shift-y)))
                  (if (loop for (sx sy) in points
                            thereis (<= (+ (expt (- px sx) 2) (expt (- py sy) 2)) d2))

@@ -78,6 +78,9 @@
       (is (string= "iai_fridge_door_shelf1_bottom"
                    (costmap:container-level-link k "iai_fridge_door" :bottommost "test"))
           "the fridge door's shelves hang under its block")
+      (is (string= "oven_area_area_right_drawer_board_2_link"
+                   (costmap:container-level-link k "oven_area_area_right_drawer_main" 2 "test" :invert t))
+          "(level-invert 2): the second from the top")
       (signals error (costmap:container-level-link k "oven_area_area_right_drawer_main" 7 "test"))
       (signals error (costmap:container-level-link k "sink_area_left_upper_drawer_main" :topmost "test")))
     (let ((milk (man-int:get-object-likely-location :milk :iai-kitchen nil :table-setting)))
