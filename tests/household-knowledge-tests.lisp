@@ -90,7 +90,10 @@
                          '(0 -1 0))))
   (destructuring-bind (one two) (man-int:get-object-type-lift-offsets :cereal :front)
     (is (close-vectors-p one '(0 0 0.1d0)))
-    (is (close-vectors-p two '(0 0 0.2d0)))))
+    (is (close-vectors-p two '(0 0 0.2d0))))
+  (destructuring-bind (one two) (man-int:get-object-type-lift-offsets :breakfast-cereal :back :shelf)
+    (is (close-vectors-p one '(-0.015 0 0.06)) "out of a shelf: lifted a little")
+    (is (close-vectors-p two '(-0.415 0 0.12)) "then pulled 0.4 m out")))
 
 (test bowl-in-a-drawer-uses-its-own-pregrasp
   (let ((in-drawer (desig:an object (type bowl)
