@@ -70,7 +70,7 @@ URDF-NAME link; else its belief-state object.  An error naming DESIGNATOR when t
 (defun child-links (env link)
   (let* ((urdf (btr:urdf env))
          (l (and urdf (gethash link (cl-urdf:links urdf)))))
-    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (cl-urdf:child-joints l)))))
+    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (reverse (cl-urdf:child-joints l))))))
 
 (defun level-links (env link)
   "The level links of the container LINK: its descendants named as levels, found through level

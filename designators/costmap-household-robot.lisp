@@ -23,7 +23,7 @@
   "The joint that moves the container LINK: the first movable joint below it, else the first
 movable joint above it; NIL when there is none."
   (labels ((movable-p (j) (member (cl-urdf:joint-type j) '(:prismatic :revolute :continuous)))
-           (below (l) (loop for j in (cl-urdf:child-joints l)
+           (below (l) (loop for j in (reverse (cl-urdf:child-joints l))
                             thereis (if (movable-p j) j (below (cl-urdf:child j)))))
            (above (l) (let ((j (cl-urdf:parent-joint l)))
                         (and j (if (movable-p j) j (above (cl-urdf:parent j)))))))
