@@ -65,7 +65,10 @@
                            (or (assoc (keyword-of s) *sides*)
                                (error "Location designator ~a: (side ~s), expected FRONT, BACK, ~
                                        LEFT, RIGHT or a list of them." designator s)))
-                         (if (listp sides) sides (list sides)))))
+                         (cond ((atom sides) (list sides))
+                               ((null (cdr (last sides))) sides)
+                               (t (error "Location designator ~a: (side ~s), expected a side or a ~
+                                          list of sides." designator sides))))))
     (when (null entries)
       (error "Location designator ~a: (side ~s) names no side." designator sides))
     (let ((local (body-local-function body)))
@@ -196,7 +199,10 @@ the location is on, in or above (the dishwasher tray).")
 (defun attachment-poses (designator)
   "The map poses of DESIGNATOR's (attachments (NAME ...)) on its reference body."
   (let* ((names (desig:desig-prop-value designator :attachments))
-         (names (if (listp names) names (list names)))
+         (names (cond ((atom names) (list names))
+                      ((null (cdr (last names))) names)
+                      (t (error "Location designator ~a: (attachments ~s), expected a list of ~
+                                 attachment names." designator names))))
          (body (reference-body designator "ATTACHMENTS"))
          (frame (cl-transforms:pose->transform (body-pose body))))
     (loop for name in names

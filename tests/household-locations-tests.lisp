@@ -109,7 +109,11 @@
         (is (every (lambda (p) (and (< (second p) 0.31d0) (> (first p) -3.38d0)
                                     (> (dist-xy p '(-3.38 0.31)) 0.3d0)))
                    far)
-            "(side (front right)): y < 0.31 and map x > -3.38 (the table's -y), beyond 0.3 m")))))
+            "(side (front right)): y < 0.31 and map x > -3.38 (the table's -y), beyond 0.3 m"))
+      (let ((yaw (yaw-of (btr:link-pose (kitchen) "dining_area_jokkmokk_table_main"))))
+        (is (every (lambda (pose) (< (abs (sin (- (yaw-of pose) yaw))) 1d-6))
+                   (samples (location `(:on ,table) '(:orientation :support-aligned)) 10))
+            "(on table) (orientation support-aligned): along the table's axes")))))
 
 (test table-setting-bowl-slot
   (with-household-kitchen ()
@@ -300,4 +304,5 @@
                                                 `(:left-of ,(desig:an object (type bowl) (name bowl-9)))))))
         (is (search "1.5" (message (location `(:on ,table) `(:near ,(desig:an object (type bowl) (name bowl-9)))
                                              '(:threshold 1.5)))))
-        (is (search "\"sink\"" (message (location '(:in "sink")))))))))
+        (is (search "\"sink\"" (message (location '(:in "sink")))))
+        (is (search "(FRONT . RIGHT)" (message (location `(:on ,table) '(:side (:front . :right))))))))))
