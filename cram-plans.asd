@@ -246,6 +246,8 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
                "cram-plans/cram-object-knowledge" "cram-plans/cram-household-knowledge"
                "cram-plans/cram-mobile-pick-place-plans"
+               "cram-plans/cram-urdf-environment-manipulation"
+               "cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-projection-demos"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
                "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
                (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
@@ -479,7 +481,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/household"))
+               "cram-plans/tests/environment-manipulation" "cram-plans/tests/household"
+               "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -573,6 +576,47 @@ bottles."
                (:file "pepper-plans")
                (:file "pepper-search")))
 
+(defsystem "cram-plans/cram-fetch-deliver-plans"
+  :description "The household action layer (FD-PLANS): navigating, turning towards, searching,
+fetching, delivering and transporting, with CRAM's retries and projection pre-checks."
+  :depends-on ("cram-plans/cram-mobile-pick-place-plans" "cram-plans/cram-location-costmap"
+               "cram-plans/cram-urdf-projection" "cram-plans/cram-household-knowledge"
+               "cram-plans/cram-urdf-environment-manipulation")
+  :pathname "src/fetch-deliver/"
+  :serial t
+  :components ((:file "fd-package")
+               (:file "fd-occasions")
+               (:file "fd-navigation")
+               (:file "fd-prechecks")
+               (:file "fd-search")
+               (:file "fd-fetch")
+               (:file "fd-deliver")
+               (:file "fd-transport")
+               (:file "fd-groundings")))
+
+(defsystem "cram-plans/cram-projection-demos"
+  :description "CRAM's household demo in projection (DEMOS): set a breakfast table from closed
+containers, then clean it up."
+  :depends-on ("cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-bullet-world-tutorial")
+  :pathname "src/demos/"
+  :serial t
+  :components ((:file "demos-package")
+               (:file "varied-kitchen")
+               (:file "household-demo")))
+
+(defsystem "cram-plans/tests/fetch-deliver"
+  :description "Searching, fetching, delivering and transporting (FD-PLANS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-fetch-deliver-plans"
+               "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :components ((:file "fetch-deliver-tests")))
+
+(defsystem "cram-plans/tests/household-demo"
+  :description "CRAM's household demo in projection (DEMOS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-projection-demos")
+  :pathname "tests/"
+  :components ((:file "household-demo-tests")))
+
 (defsystem "cram-plans/tests/household"
   :description "Household object knowledge and location designators in the kitchen."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial")
@@ -585,3 +629,35 @@ bottles."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
   :components ((:file "plans-tests") (:file "plans-placing-tests")))
+
+;;; Environment manipulation: drawers, doors and what is inside them.
+
+(defsystem "cram-plans/cram-urdf-environment-manipulation"
+  :description "Opening, closing, accessing and sealing the drawers and doors of an articulated
+environment, container events and attachments in the belief state, the container occasions
+(ENV-MAN)."
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms"
+               "cram-plans/cram-designators" "cram-plans/cram-language" "cram-plans/cram-common-failures"
+               "cram-plans/cram-executive" "cram-plans/cram-robot-interfaces"
+               "cram-plans/cram-bullet-reasoning" "cram-plans/cram-native" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans")
+  :pathname "src/environment-manipulation/"
+  :serial t
+  :components ((:file "package")
+               (:file "container-types")
+               (:file "containers")
+               (:file "trajectories")
+               (:file "base-poses")
+               (:file "belief")
+               (:file "occasions")
+               (:file "plans")
+               (:file "access-seal")
+               (:file "groundings")))
+
+(defsystem "cram-plans/tests/environment-manipulation"
+  :description "Drawers and doors: grounding, distances, trajectories, the belief state, goals,
+attachments and the plans of opening, closing, accessing and sealing."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial"
+               "cram-plans/cram-urdf-environment-manipulation")
+  :pathname "tests/"
+  :components ((:file "environment-manipulation-tests")))

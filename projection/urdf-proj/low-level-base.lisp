@@ -5,12 +5,23 @@
 
 ;;; ---- collisions -----------------------------------------------------------------------------
 
+(defvar *grasped-objects* '()
+  "The names of the objects the robot's hands are closing in on (set by the picking-up plan
+around its grasping step): contacts of the hand links with them are the grasp, not collisions.")
+
+(defun grasp-contact-p (robot link other)
+  "True when LINK of ROBOT is a hand link and OTHER is an object being grasped."
+  (and *grasped-objects* link
+       (member (btr:name other) *grasped-objects*)
+       (loop for arm in (ignore-errors (robot-arms))
+             thereis (member link (hand-links arm robot) :test #'string=))))
+
 (defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
                               ignore-links)
   "The names of the objects the robot collides with: contacts of its links (except the links
 in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
 with anything but the robot and each other. Contacts of the robot with the floor (static
-planes) do not count."
+planes) and of its hands with the objects being grasped (*GRASPED-OBJECTS*) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
          (hits '()))
     (loop for (a la b lb) in (btr::contact-records world robot)
@@ -18,7 +29,8 @@ planes) do not count."
           for link = (if (eq a robot) la lb)
           unless (or (member (btr:name other) attached)
                      (eq (btr:object-kind other) :static-plane)
-                     (and link (member link ignore-links :test #'string=)))
+                     (and link (member link ignore-links :test #'string=))
+                     (grasp-contact-p robot link other))
             do (pushnew (btr:name other) hits))
     (dolist (name attached)
       (let ((o (btr:object world name)))

@@ -29,7 +29,8 @@
    ;; occasion predicates
    #:object-in-hand #:object-at-location #:robot-at-location #:looking-at #:torso-at
    #:arms-positioned-at #:tool-frames-at #:gripper-joint-at #:gripper-opened
-   #:gripper-closed #:container-state #:object-attached-to))
+   #:gripper-closed #:container-state #:object-attached-to
+   #:location-accessible #:location-reset))
 
 (defpackage :cram-process-modules
   (:nicknames :cpm)

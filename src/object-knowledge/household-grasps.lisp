@@ -22,11 +22,21 @@
     "Named tool-frame rotations in the object frame, as rotation matrix rows: :ZY is the
 gripper's z axis along the object's -z (from the top), :XZ along its -x (from the front) ...")
 
+  (defparameter *z-forward-to-tool-frame*
+    '((0 1 0) (0 0 1) (1 0 0))
+    "The rotation from a gripper frame with z forward between the fingers (the frame the rows of
+*GRASP-ROTATIONS* are written in) to the tool frame of the robots here, with x forward.")
+
   (defun grasp-rotation-rows (name)
-    "The rotation matrix rows of the grasp rotation NAME (a key of *GRASP-ROTATIONS*)."
-    (or (cdr (assoc name *grasp-rotations*))
-        (error "Unknown grasp rotation ~s: expected one of ~{~s~^ ~}." name
-               (mapcar #'car *grasp-rotations*))))
+    "The rotation matrix rows of the tool frame in the object frame for the grasp rotation NAME
+(a key of *GRASP-ROTATIONS*, written for a z-forward gripper frame)."
+    (let ((rows (or (cdr (assoc name *grasp-rotations*))
+                    (error "Unknown grasp rotation ~s: expected one of ~{~s~^ ~}." name
+                           (mapcar #'car *grasp-rotations*)))))
+      (loop for row in rows
+            collect (loop for j below 3
+                          collect (loop for k below 3
+                                        sum (* (nth k row) (nth j (nth k *z-forward-to-tool-frame*))))))))
 
   (defun exact-doubles (tree)
     "TREE with every real replaced by the double-float of its decimal value (0.07 -> 0.07d0)."

@@ -23,9 +23,13 @@
    ;; object knowledge in context (generics, methods in CRAM-OBJECT-KNOWLEDGE)
    #:get-object-likely-location #:get-object-destination #:get-object-location-type
    #:most-specific-type-method #:no-object-knowledge #:requested-object-type
+   ;; containers (defined by cram-urdf-environment-manipulation)
+   #:get-container-opening-distance #:object-is-a-container
    ;; trajectories
    #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
    #:get-action-trajectory #:get-traj-poses-by-label
+   ;; where an object is (occasions of the household plans)
+   #:location-certain
    #:grasp-pose #:transform-pose-by))
 
 (in-package :cram-manipulation-interfaces)

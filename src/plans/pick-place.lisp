@@ -113,6 +113,15 @@
 (defun log-pp (tag control &rest arguments)
   (apply #'cpl:log-message :info `(pick-place ,tag) control arguments))
 
+(defmacro with-object-being-grasped ((object) &body body)
+  "Run BODY while the hands may touch OBJECT (URDF-PROJ:*GRASPED-OBJECTS*): closing in on an
+object is a grasp, not a collision. Set globally, as motions run in process-module threads."
+  (let ((name (gensym "NAME")))
+    `(let ((,name (object-designator-name ,object)))
+       (unwind-protect
+            (progn (push ,name urdf-proj:*grasped-objects*) ,@body)
+         (setf urdf-proj:*grasped-objects* (remove ,name urdf-proj:*grasped-objects* :count 1))))))
+
 (defun pick-up (&key arm grasp object gripper-opening effort trajectory look-pose
                 &allow-other-keys)
   "Pick up OBJECT with ARM using GRASP along TRAJECTORY (MAN-INT segments :REACHING,
@@ -133,11 +142,12 @@ and ignored; a failed grip propagates (e.g. COMMON-FAIL:GRIPPER-CLOSED-COMPLETEL
       (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
                           :ignore-failures t))
     (log-pp 'pick-up "Grasping")
-    (perform-arm-action :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)
-                        :ignore-failures t)
-    (log-pp 'pick-up "Gripping")
-    (exe:perform (desig:an action (type gripping) (arm ?arm) (object ?object)
-                           (grasp ?grasp) (effort ?effort)))
+    (with-object-being-grasped (object)
+      (perform-arm-action :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)
+                          :ignore-failures t)
+      (log-pp 'pick-up "Gripping")
+      (exe:perform (desig:an action (type gripping) (arm ?arm) (object ?object)
+                             (grasp ?grasp) (effort ?effort))))
     (log-pp 'pick-up "Lifting")
     (perform-arm-action :lifting arm (man-int:get-traj-poses-by-label trajectory :lifting)
                         :ignore-failures t)
