@@ -67,10 +67,15 @@ URDF-NAME link; else its belief-state object.  An error naming DESIGNATOR when t
 (defun level-link-name-p (name)
   (some (lambda (p) (search p name)) *level-link-patterns*))
 
+(defun urdf-link (env link)
+  "The CL-URDF link named LINK of the environment ENV, or NIL."
+  (let ((urdf (btr:urdf env)))
+    (and urdf (gethash link (cl-urdf:links urdf)))))
+
 (defun child-links (env link)
-  (let* ((urdf (btr:urdf env))
-         (l (and urdf (gethash link (cl-urdf:links urdf)))))
-    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (reverse (cl-urdf:child-joints l))))))
+  "The names of the links right below LINK of ENV, in URDF document order."
+  (let ((l (urdf-link env link)))
+    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (cl-urdf:child-joints-in-order l)))))
 
 (defun level-links (env link)
   "The level links of the container LINK: its descendants named as levels, found through level

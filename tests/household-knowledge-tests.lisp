@@ -65,9 +65,10 @@
 (test cup-and-cereal-grasps-as-cram
   (let ((top (man-int:get-object-type-to-gripper-transform :cup nil :left :top)))
     (is (close-vectors-p (cl-transforms:translation top) '(-0.05 0 0.04)))
-    ;; rotation ZY: the gripper's x along the object's x, its z along the object's -z
-    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation top) (cl-transforms:make-3d-vector 0 0 1))
-                         '(0 0 -1) 1d-9))
+    ;; rotation ZY (CRAM's z-forward gripper frame): the tool frame's x axis, forward between
+    ;; the fingers, along the object's -z
+    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation top) (cl-transforms:make-3d-vector 1 0 0))
+                         '(0 0 -1)))
     (let ((pregrasps (man-int:get-object-type-to-gripper-pregrasp-transforms :cup nil :left :top)))
       (is (close-vectors-p (cl-transforms:translation (first pregrasps)) '(-0.05 0 0.11)))
       (is (close-vectors-p (cl-transforms:translation (second pregrasps)) '(-0.05 0 0.11)))))
@@ -77,16 +78,16 @@
   (is (equal '(:top :top2 :left-side :right-side :back :front) (man-int:object-type-grasps :mug))
       "mugs are cups")
   (let ((flipped (man-int:get-object-type-to-gripper-transform :breakfast-cereal nil :left :front-flipped)))
-    ;; XZ2 rows (0 0 -1) (1 0 0) (0 -1 0): the gripper's z axis along the object's -x (from
-    ;; the front, as XZ) and its x axis along +y (XZ: -y), turned about the approach
-    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 0 0 1))
-                         '(-1 0 0)))
+    ;; XZ2 rows (0 0 -1) (1 0 0) (0 -1 0): approaching along the object's -x (from the front,
+    ;; as XZ), the fingers' plane turned about the approach: the tool's y axis along +y (XZ: -y)
     (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 1 0 0))
+                         '(-1 0 0)))
+    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 0 1 0))
                          '(0 1 0)))
     (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation
                                                 (man-int:get-object-type-to-gripper-transform
                                                  :breakfast-cereal nil :left :front))
-                                               (cl-transforms:make-3d-vector 1 0 0))
+                                               (cl-transforms:make-3d-vector 0 1 0))
                          '(0 -1 0))))
   (destructuring-bind (one two) (man-int:get-object-type-lift-offsets :cereal :front)
     (is (close-vectors-p one '(0 0 0.1d0)))

@@ -243,11 +243,11 @@
                                                    (:part-of :iai-kitchen))))
            (handle (costmap::environment-part-target ?door))
            (points (sample-points (desig:a location (reachable-for pr2) (arm right) (object ?door)) 30)))
-      (is (string= "iai_fridge_door_joint" (cl-urdf:name (costmap:container-joint (kitchen) "iai_fridge_door"))))
+      (is (string= "iai_fridge_door_joint" (cl-urdf:name (costmap::container-joint (kitchen) "iai_fridge_door"))))
       (is (< (cl-transforms:v-dist handle (cl-transforms:make-3d-vector 1.195 -0.730 0.990)) 0.02)
           "the target is the door's handle")
       (multiple-value-bind (closed open)
-          (costmap::handle-positions-at-limits (kitchen) (costmap:container-joint (kitchen) "iai_fridge_door")
+          (costmap::handle-positions-at-limits (kitchen) (costmap::container-joint (kitchen) "iai_fridge_door")
                                                handle)
         (is (< (cl-transforms:v-dist open (cl-transforms:make-3d-vector 0.695 -1.371 0.990)) 0.03)
             "the handle of the open door (pi/2)")
@@ -259,12 +259,13 @@
   (with-household-kitchen ()
     (let ((k (kitchen)))
       (is (string= "sink_area_left_upper_drawer_main_joint"
-                   (cl-urdf:name (costmap:container-joint k "sink_area_left_upper_drawer_main"))))
+                   (cl-urdf:name (costmap::container-joint k "sink_area_left_upper_drawer_main"))))
       (is (string= "sink_area_dish_washer_door_joint"
-                   (cl-urdf:name (costmap:container-joint k "sink_area_dish_washer_main")))
+                   (cl-urdf:name (costmap::container-joint k "sink_area_dish_washer_main")))
           "the dishwasher opens by its door")
-      (is (string= "sink_area_dish_washer_tray_handle_front_side"
-                   (costmap:handle-link k "sink_area_dish_washer_tray_bottom"))))))
+      (is (string= "sink_area_dish_washer_tray_handle_left_side"
+                   (costmap::handle-link k "sink_area_dish_washer_tray_bottom"))
+          "the tray's handle bar, below its frame"))))
 
 (test restricted-area-not-for-objects-on-the-robot
   (with-household-kitchen ()
