@@ -197,3 +197,25 @@
         "its box's low corner from the origin"))
   (with-household-kitchen ()
     (is (typep (spawn :spoon-1 :spoon '((0 0 2) (0 0 0 1))) 'btr:item) "a :spoon mesh object")))
+
+(defun pregrasp-height (?object)
+  "How far above the grasp pose the first pregrasp pose lies when picking up ?OBJECT from the
+top with the left arm."
+  (let* ((groundings (pp-plans::picking-up-groundings
+                      (desig:an action (type picking-up) (arm left) (grasp top) (object ?object))))
+         (trajectory (desig:desig-prop-value (second (first groundings)) :trajectory)))
+    (flet ((z (label) (cl-transforms:z (cl-transforms:origin
+                                        (first (man-int:get-traj-poses-by-label trajectory label))))))
+      (- (z :reaching) (z :grasping)))))
+
+(test picking-up-a-bowl-from-a-drawer-reaches-from-higher
+  (with-household-kitchen ()
+    (spawn :bowl-1 :bowl '((1.2 0.95 0.47) (0 0 0 1)))
+    (let ((in-drawer (desig:an object (type bowl) (name bowl-1)
+                               (location (desig:a location
+                                                  (in (desig:an object (type drawer)
+                                                                (urdf-name sink-area-left-middle-drawer-main)
+                                                                (part-of iai-kitchen))))))))
+      (is (< (abs (- (pregrasp-height in-drawer) 0.2)) 1d-6) "0.2 m above the grasp in a drawer")
+      (is (< (abs (- (pregrasp-height (desig:an object (type bowl) (name bowl-1))) 0.07)) 1d-6)
+          "0.07 m elsewhere"))))

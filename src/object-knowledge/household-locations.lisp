@@ -182,12 +182,14 @@ properties ((key value) ...) appended."
 
 (defun man-int:get-object-location-type (object)
   "The type (a keyword) of the object the object designator OBJECT lies in, on or above, by
-its LOCATION's IN, ON or ABOVE reference (e.g. :DRAWER); NIL when it does not say."
+its LOCATION's IN, ON or ABOVE reference (e.g. :DRAWER), or by that of the designator it was
+first described by (before perception); NIL when neither says."
   (unless (typep object 'desig:object-designator)
     (error 'man-int:manipulation-knowledge-error
            :format-control "GET-OBJECT-LOCATION-TYPE: expected an object designator, got ~s."
            :format-arguments (list object)))
-  (let ((location (desig:desig-prop-value object :location)))
+  (let ((location (or (desig:desig-prop-value object :location)
+                      (desig:desig-prop-value (desig:first-desig object) :location))))
     (when (typep location 'desig:location-designator)
       (let ((reference (some (lambda (key) (desig:desig-prop-value location key)) '(:in :on :above))))
         (when (typep reference 'desig:object-designator)
