@@ -58,7 +58,10 @@
   (is (= 0.1 (man-int:get-object-type-gripper-opening :cup)))
   (is (= 0.05 (man-int:get-object-type-gripper-opening :spoon)))
   (is (= 0.02 (man-int:get-object-type-gripper-opening :plate)))
-  (is (= 0.06 (man-int:get-object-type-gripper-opening :container)))
+  (is (member :spoon (objects:household-object-types)))
+  (is (every (lambda (type) (man-int:object-type-subtype-p :household-item type))
+             (objects:household-object-types))
+      "only household items")
   (is-false (man-int:object-rotationally-symmetric-p :bowl))
   (is-true (man-int:object-rotationally-symmetric-p :bottle) "the bottle keeps its knowledge"))
 
