@@ -59,19 +59,13 @@ properties ((key value) ...) appended."
                                                (context (eql :table-setting)))
   (location `(:in ,(kitchen-part :fridge :iai-fridge-door environment '(:level :bottommost)))))
 
-(defun cereal-likely-location (type environment)
+(defmethod man-int:get-object-likely-location ((type (eql :cereal)) environment human
+                                               (context (eql :table-setting)))
+  "Cereal boxes (breakfast-cereal too) lie on the top board of the oven drawer."
   (location `(:in ,(kitchen-part :drawer :oven-area-area-right-drawer-main environment
                                  '(:level :topmost)))
             '(:side :back) '(:range 0.1) '(:orientation :support-aligned)
             `(:for ,(for-type type))))
-
-(defmethod man-int:get-object-likely-location ((type (eql :cereal)) environment human
-                                               (context (eql :table-setting)))
-  (cereal-likely-location type environment))
-
-(defmethod man-int:get-object-likely-location ((type (eql :breakfast-cereal)) environment human
-                                               (context (eql :table-setting)))
-  (cereal-likely-location type environment))
 
 (defmethod man-int:get-object-likely-location ((type (eql :household-item)) environment human
                                                (context (eql :table-cleaning)))
@@ -110,10 +104,6 @@ properties ((key value) ...) appended."
   (table-front :milk environment))
 
 (defmethod man-int:get-object-destination ((type (eql :cereal)) environment human
-                                           (context (eql :table-setting)))
-  (table-front type environment))
-
-(defmethod man-int:get-object-destination ((type (eql :breakfast-cereal)) environment human
                                            (context (eql :table-setting)))
   (table-front type environment))
 
@@ -163,11 +153,9 @@ properties ((key value) ...) appended."
 
 (defmethod man-int:get-object-destination ((type (eql :cereal)) environment human
                                            (context (eql :table-cleaning)))
-  (man-int:get-object-likely-location type environment human :table-setting))
-
-(defmethod man-int:get-object-destination ((type (eql :breakfast-cereal)) environment human
-                                           (context (eql :table-cleaning)))
-  (man-int:get-object-likely-location type environment human :table-setting))
+  "Cereal boxes go back where they came from."
+  (man-int:get-object-likely-location (man-int:requested-object-type type) environment human
+                                      :table-setting))
 
 (defmethod man-int:get-object-destination ((type (eql :kitchen-item)) environment human
                                            (context (eql :table-cleaning)))
