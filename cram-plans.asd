@@ -251,7 +251,8 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-projection-demos"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
                "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
-               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
+               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")
+               (:feature :cram-plans-roslisp "cram-plans/cram-urdf-environment-manipulation/ros")))
 
 (defsystem "cram-plans/cram-ros-pms/package"
   :description "The light part of the robot process modules: package CRAM-ROS-PMS (PR2-PMS),
@@ -482,8 +483,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/environment-manipulation" "cram-plans/tests/household"
-               "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"))
+               "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"
+               "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -655,10 +656,25 @@ environment, container events and attachments in the belief state, the container
                (:file "access-seal")
                (:file "groundings")))
 
+(defsystem "cram-plans/cram-urdf-environment-manipulation/ros"
+  :description "The environment's joint states on kitchen/cram_joint_states after container
+events, while a ROS node runs."
+  :depends-on ("cram-plans/cram-urdf-environment-manipulation" "cram-plans/roslisp-utilities/ros"
+               "roslisp" "sensor_msgs-msg" "std_msgs-msg")
+  :pathname "src/environment-manipulation/"
+  :components ((:file "ros-joint-states")))
+
 (defsystem "cram-plans/tests/environment-manipulation"
   :description "Drawers and doors: grounding, distances, trajectories, the belief state, goals,
 attachments and the plans of opening, closing, accessing and sealing."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial"
-               "cram-plans/cram-urdf-environment-manipulation")
+               "cram-plans/cram-urdf-environment-manipulation" "cram-plans/replay")
   :pathname "tests/"
   :components ((:file "environment-manipulation-tests")))
+
+(defsystem "cram-plans/tests/environment-manipulation-ros"
+  :description "Environment manipulation with a ROS node: the kitchen's joint states on ROS."
+  :depends-on ("cram-plans/tests/environment-manipulation" "cram-plans/tests/ros"
+               "cram-plans/cram-urdf-environment-manipulation/ros")
+  :pathname "tests/"
+  :components ((:file "environment-manipulation-ros-tests")))

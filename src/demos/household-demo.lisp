@@ -100,25 +100,30 @@ none); the tests record the table state with it.")
   "CRAM's household demo in projection: initialize the kitchen, spawn OBJECT-LIST (types, in
 the order the table is set; the bowl must come before spoon and cup) in their closed
 containers, park the robot, transport each object to the table (context table-setting), then
-each in reverse order back (context table-cleaning). With VARIED-KITCHEN the furniture of the
-belief state is moved a little first (seeded by COSTMAP:*COSTMAP-RANDOM-STATE*). No failure is
-caught. Returns the object list."
+each in reverse order back (context table-cleaning). With VARIED-KITCHEN the dining table and
+the kitchen island stand a little elsewhere (VARY-KITCHEN). BTR:*VISIBILITY-THRESHOLD* is
+*DEMO-VISIBILITY-THRESHOLD* meanwhile. No failure is caught. Returns the object list."
   (let ((unknown (set-difference object-list (mapcar #'first *object-spawning-poses*))))
     (when unknown
       (demo-error "HOUSEHOLD-DEMO: unknown object type~p ~{~s~^, ~}; expected some of ~{~s~^, ~}."
                   (length unknown) unknown (mapcar #'first *object-spawning-poses*))))
   (unless (btr:get-environment-object)
     (btw-tut:init-projection))
-  (let ((btr:*visibility-threshold* *demo-visibility-threshold*))
-    (initialize)
-    (when varied-kitchen (vary-kitchen))
-    (spawn-objects-on-fixed-spots :object-types object-list)
-    (urdf-proj:with-simulated-robot
-      (park-robot)
-      (dolist (type object-list)
-        (transport type :table-setting))
-      (when *after-setting-hook* (funcall *after-setting-hook*))
-      (dolist (type (reverse object-list))
-        (transport type :table-cleaning))
-      (park-robot)))
+  ;; set, not bound: perception runs in the process modules' threads
+  (let ((threshold btr:*visibility-threshold*))
+    (setf btr:*visibility-threshold* *demo-visibility-threshold*)
+    (unwind-protect
+         (progn
+           (initialize)
+           (when varied-kitchen (vary-kitchen))
+           (spawn-objects-on-fixed-spots :object-types object-list)
+           (urdf-proj:with-simulated-robot
+             (park-robot)
+             (dolist (type object-list)
+               (transport type :table-setting))
+             (when *after-setting-hook* (funcall *after-setting-hook*))
+             (dolist (type (reverse object-list))
+               (transport type :table-cleaning))
+             (park-robot)))
+      (setf btr:*visibility-threshold* threshold)))
   object-list)

@@ -53,8 +53,10 @@ CONTAINER's handle."
                 common-fail:gripper-low-level-failure common-fail:manipulation-low-level-failure
                 desig:designator-error) (e)
              (cpl:log-message :warn '(env-man access-or-seal) "~a" e)
-             (ignore-errors (let ((?arm (first arms)))
-                              (exe:perform (desig:an action (type releasing) (gripper ?arm)))))
+             (let ((?arm (first arms)))
+               (handler-case (exe:perform (desig:an action (type releasing) (gripper ?arm)))
+                 (cpl:plan-failure (f)
+                   (cpl:log-message :warn '(env-man access-or-seal) "Releasing failed: ~a" f))))
              (cpl:do-retry arm-retries
                (pop arms)
                (cpl:log-message :warn '(env-man access-or-seal) "Trying the ~(~a~) arm." (first arms))

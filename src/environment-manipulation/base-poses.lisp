@@ -46,29 +46,69 @@ pose, as MOVE-TCP does with its base offsets.")
 
 (defun poses-reachable-p (arm poses robot)
   "True when ARM of ROBOT has IK solutions for every tool pose of POSES from where it stands, or
-from the base shifted by one of *REACH-BASE-OFFSETS*."
-  (let ((base (btr:pose robot)))
+from the base shifted by one of *REACH-BASE-OFFSETS*, at one torso height for all of them (the
+current one first, then the others MOVE-TCP would try)."
+  (let* ((base (btr:pose robot))
+         (torso (urdf-proj:torso-joint))
+         (torso-value (and torso (member torso (btr:joint-names robot) :test #'string=)
+                           (btr:joint-state robot torso)))
+         (heights (or (and torso-value (urdf-proj::torso-candidates robot nil)) (list nil))))
     (unwind-protect
-         (every (lambda (pose)
-                  (some (lambda (dx)
-                          (setf (btr:pose robot)
-                                (translate-pose base (cl-transforms:rotate
-                                                      (cl-transforms:orientation base)
-                                                      (cl-transforms:make-3d-vector dx 0 0))))
-                          (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
-                                            :robot robot :max-restarts *reachability-ik-restarts*))
-                        *reach-base-offsets*))
-                poses)
-      (setf (btr:pose robot) base))))
+         (some (lambda (height)
+                 (when height
+                   (btr:set-robot-state-from-joints (list (list torso height)) robot))
+                 (every (lambda (pose)
+                          (some (lambda (dx)
+                                  (setf (btr:pose robot)
+                                        (translate-pose base (cl-transforms:rotate
+                                                              (cl-transforms:orientation base)
+                                                              (cl-transforms:make-3d-vector dx 0 0))))
+                                  (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
+                                                    :robot robot
+                                                    :max-restarts *reachability-ik-restarts*))
+                                *reach-base-offsets*))
+                        poses))
+               heights)
+      (setf (btr:pose robot) base)
+      (when torso-value
+        (btr:set-robot-state-from-joints (list (list torso torso-value)) robot)))))
+
+(defparameter *reachability-cache-size* 256
+  "The most answers of REACHABLE-GRASP kept (the cache is emptied when it is full).")
+
+(defvar *reachability-cache* (make-hash-table :test 'equal :synchronized t)
+  "(robot model, base pose, torso, container state, action, arm, amount, grasps) → the answer
+of REACHABLE-GRASP: IK depends on nothing else, so repeating an action where the robot stands
+asks the solver once.")
+
+(defun reachability-key (robot container action arm amount grasps)
+  (let* ((base (btr:pose robot))
+         (o (cl-transforms:origin base))
+         (torso (urdf-proj:torso-joint)))
+    (flet ((r (x) (round (* x 1d6))))
+      (list (btr:urdf robot)
+            (r (cl-transforms:x o)) (r (cl-transforms:y o)) (r (cl-transforms:z o))
+            (r (cl-transforms:get-yaw (cl-transforms:orientation base)))
+            (and torso (member torso (btr:joint-names robot) :test #'string=)
+                 (r (btr:joint-state robot torso)))
+            (btr:urdf (container-environment container)) (container-joint container)
+            (r (container-joint-state container)) action arm (r amount) grasps))))
 
 (defun reachable-grasp (container action arm amount grasps)
   "The first of GRASPS whose trajectory ARM reaches from the robot's current base, or NIL."
-  (let ((robot (urdf-proj:robot-object)))
-    (find-if (lambda (grasp)
-               (poses-reachable-p arm (trajectory-checkpoints
-                                       (container-trajectory container action grasp amount))
-                                  robot))
-             grasps)))
+  (let* ((robot (urdf-proj:robot-object))
+         (key (reachability-key robot container action arm amount grasps)))
+    (multiple-value-bind (answer known) (gethash key *reachability-cache*)
+      (if known
+          answer
+          (let ((answer (find-if (lambda (grasp)
+                                   (poses-reachable-p arm (trajectory-checkpoints
+                                                           (container-trajectory container action grasp amount))
+                                                      robot))
+                                 grasps)))
+            (when (>= (hash-table-count *reachability-cache*) *reachability-cache-size*)
+              (clrhash *reachability-cache*))
+            (setf (gethash key *reachability-cache*) answer))))))
 
 (defun prismatic-base-candidates (container action arm amount)
   (multiple-value-bind (axis) (joint-axis-in-map container)

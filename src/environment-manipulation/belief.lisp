@@ -58,7 +58,7 @@ and clamped to the joint's limits (with a warning when beyond), then run
 ;;; ---- objects and environment links ----------------------------------------------------------
 
 (defun event-object-name (event)
-  (or (and (compute-applicable-methods #'cpoe:event-object-name (list event))
+  (or (and (typep event '(or cpoe:object-attached-robot cpoe:object-detached-robot))
            (cpoe:event-object-name event))
       (let ((designator (cpoe:event-object-designator event)))
         (and designator
@@ -77,16 +77,30 @@ was attached to."
         (when links (btr:detach-object environment object))
         links))))
 
+(defun boxes-overlap-p (lo-a hi-a lo-b hi-b margin)
+  (and (<= (- (cl-transforms:x lo-a) margin) (cl-transforms:x hi-b))
+       (<= (- (cl-transforms:x lo-b) margin) (cl-transforms:x hi-a))
+       (<= (- (cl-transforms:y lo-a) margin) (cl-transforms:y hi-b))
+       (<= (- (cl-transforms:y lo-b) margin) (cl-transforms:y hi-a))
+       (<= (- (cl-transforms:z lo-a) margin) (cl-transforms:z hi-b))
+       (<= (- (cl-transforms:z lo-b) margin) (cl-transforms:z hi-a))))
+
 (defun touched-environment-links (object environment)
-  "The links of ENVIRONMENT within *RESTING-CONTACT-DISTANCE* of OBJECT, in link order."
-  (let* ((world (btr:world object))
-         (links (btr:link-names environment))
-         (touched (loop for (nil nil other other-link) in
-                        (cram-native:object-contacts (btr:world-handle world) (btr:object-handle object)
-                                                     :threshold *resting-contact-distance*)
-                        when (and (eql other (btr:object-handle environment)) (>= other-link 0))
-                          collect (nth other-link links))))
-    (remove-if-not (lambda (l) (member l touched :test #'string=)) links)))
+  "The links of ENVIRONMENT within *RESTING-CONTACT-DISTANCE* of OBJECT, in link order: links
+whose bounding box is that close are measured with the shim's closest distance."
+  (let ((world (btr:world-handle (btr:world object)))
+        (margin *resting-contact-distance*))
+    (multiple-value-bind (lo hi) (btr:aabb object)
+      (loop for link in (btr:link-names environment)
+            for i from 0
+            when (and (cram-native:robot-link-has-body-p world (btr:object-handle environment) i)
+                      (multiple-value-bind (link-lo link-hi) (btr:aabb environment i)
+                        (boxes-overlap-p lo hi link-lo link-hi margin))
+                      (<= (cram-native:closest-distance world (btr:object-handle object)
+                                                        (btr:object-handle environment)
+                                                        :link-b i :max-distance (* 2 margin))
+                          margin))
+              collect link))))
 
 (defun attach-object-to-touched-links (object &optional (environment (btr:get-environment-object)))
   "Attach OBJECT (an object or its name) to every link of ENVIRONMENT it rests on (touches), so

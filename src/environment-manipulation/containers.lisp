@@ -15,6 +15,15 @@ JOINT-TYPE (:PRISMATIC or :REVOLUTE), LOWER and UPPER (its limits) and TYPE (the
 object type, or NIL)."
   environment name link handle joint joint-type lower upper type)
 
+(loop for (name text) in
+      '((container-environment "The environment object (BTR) a CONTAINER belongs to.")
+        (container-name "The keyword a CONTAINER was named with, e.g. :IAI-FRIDGE-DOOR.")
+        (container-link "The URDF link name of a CONTAINER.")
+        (container-handle "The URDF link name of a CONTAINER's handle.")
+        (container-joint "The name of the joint that moves a CONTAINER.")
+        (container-joint-type "The type of a CONTAINER's joint: :PRISMATIC or :REVOLUTE."))
+      do (setf (documentation name 'function) text))
+
 (defun urdf-name->link-name (urdf-name)
   "The URDF link name of URDF-NAME: a symbol such as SINK-AREA-LEFT-UPPER-DRAWER-MAIN becomes
 \"sink_area_left_upper_drawer_main\"; a string stays as it is."
@@ -101,7 +110,9 @@ unknown (listing the container links), or the link is no container."
                      type urdf-name))
         (let ((joint-type (if (eq (cl-urdf:joint-type joint) :prismatic) :prismatic :revolute)))
           (%make-container :environment environment
-                           :name (if (symbolp urdf-name) urdf-name (link-name->urdf-name urdf-name))
+                           :name (if (symbolp urdf-name)
+                                     (intern (symbol-name urdf-name) :keyword)
+                                     (link-name->urdf-name urdf-name))
                            :link link-name :handle (cl-urdf:name handle)
                            :joint (cl-urdf:name joint) :joint-type joint-type
                            :lower (d (or (cl-urdf:lower joint) (- pi)))

@@ -39,4 +39,7 @@ message names the value as it was written and what was expected."))
   "Log at :INFO under (ENV-MAN TAG), as CRAM's plans log their steps."
   (apply #'cpl:log-message :info `(env-man ,tag) control arguments))
 
-(defun d (x) (coerce x 'double-float))
+(defun d (x)
+  "The real X as a double float; a single float by its printed decimal (0.3 → 0.3d0), as the
+belief state reads the numbers a user types."
+  (btr::to-double x))

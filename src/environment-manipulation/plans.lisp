@@ -148,7 +148,10 @@ container is there already nothing moves. When the handle's trajectory is out of
 robot first drives in front of it. Failures: ENVIRONMENT-UNREACHABLE (no base pose or no grasp
 works), ENVIRONMENT-MANIPULATION-GOAL-NOT-REACHED (pulling or pushing failed),
 GRIPPER-CLOSED-COMPLETELY (\"Handle slipped\"). Returns the joint's new value."
-  (let ((container (container-designator-container object)))
+  (let ((container (container-designator-container object))
+        (arm (if arm
+                 (check-arm arm)
+                 (or (first (free-arms)) (env-error "No free arm to ~(~a~) ~s with." action object)))))
     (multiple-value-bind (amount target) (container-opening-amount container action distance)
       (when (< amount 1d-4)
         (log-env 'manipulate-container "~(~a~) is at ~,4f already (target ~,4f): nothing to ~(~a~)."

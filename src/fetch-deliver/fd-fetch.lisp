@@ -20,8 +20,9 @@ ARMS) and sees it."
 (defun fetch (&key object arms grasps robot-location look-location &allow-other-keys)
   "Fetch the perceived OBJECT: drive to ROBOT-LOCATION, turn towards LOOK-LOCATION, perceive
 the object again and pick it up with the first of ARMS and GRASPS (NIL: what picking up
-chooses). Retries: the next grasp (5), the next arm (1), a new base pose (50) on navigation,
-perception, reach or manipulation failures, re-perceiving and re-picking (2) on a misgrasp.
+chooses). Retries: the next grasp (5), the next arm (1), a new base pose (50, the torso raised) on
+navigation, perception, reach or manipulation failures, re-perceiving and re-picking (2) on a
+misgrasp.
 Returns the object designator; FETCHING-FAILED when all are used up."
   (let ((?object object)
         (?robot-location (reset-or-nil robot-location))
@@ -44,7 +45,10 @@ Returns the object designator; FETCHING-FAILED when all are used up."
                    (:error-object-or-string
                     (format nil "Object ~a is unreachable: ~a" (object-text ?object) e)
                     :warning-namespace (fd-plans fetch)
-                    :rethrow-failure 'common-fail:fetching-failed))))
+                    :rethrow-failure 'common-fail:fetching-failed)
+                 ;; look from higher up at the next base pose
+                 (exe:perform (desig:an action (type moving-torso) (joint-angle upper-limit)
+                                        (goal (cpoe:torso-at :upper-limit)))))))
           (let ((?location ?robot-location))
             (exe:perform (desig:an action (type navigating) (location ?location))))
           (let ((?target ?look-location))

@@ -68,7 +68,8 @@ OBJECT-UNREACHABLE when none does."
                                        :placing (desig:an action (type placing) (object ?object)
                                                           (arm ?arm) (target ?target)))))
                     (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
-               (when (trajectory-reachable-p arm trajectory '(:putting))
+               (when (pp-plans::with-object-being-placed (object)
+                       (trajectory-reachable-p arm trajectory '(:putting)))
                  (return-from check-placing-collisions current))
                (setf current (desig:next-solution current))))
     (cpl:fail 'common-fail:object-unreachable

@@ -115,14 +115,51 @@
 (defun log-pp (tag control &rest arguments)
   (apply #'cpl:log-message :info `(pick-place ,tag) control arguments))
 
+(defun container-links (object-name)
+  "The environment links around the object OBJECT-NAME when it lies in a container: for each
+link it is attached to, every link under that link's parent (a drawer's bottom, walls and
+boards). NIL for an object not attached to the environment."
+  (let* ((env (btr:get-environment-object))
+         (object (btr:object btr:*current-bullet-world* object-name))
+         (links (and env object (btr:object-attached env object))))
+    (when links
+      (let ((model (btr:urdf env)))
+        (labels ((below (link)
+                   (cons (cl-urdf:name link)
+                         (loop for j in (cl-urdf:child-joints link)
+                               append (below (cl-urdf:child j))))))
+          (remove-duplicates
+           (loop for name in links
+                 for link = (gethash name (cl-urdf:links model))
+                 for joint = (and link (cl-urdf:parent-joint link))
+                 when link
+                   append (below (if joint (cl-urdf:parent joint) link)))
+           :test #'string=))))))
+
 (defmacro with-object-being-grasped ((object) &body body)
-  "Run BODY while the hands may touch OBJECT (URDF-PROJ:*GRASPED-OBJECTS*): closing in on an
-object is a grasp, not a collision. Set globally, as motions run in process-module threads."
+  "Run BODY while the hands may touch OBJECT and the container it lies in
+(URDF-PROJ:*GRASPED-OBJECTS*, URDF-PROJ:*GRASP-CONTAINER-LINKS*): closing in on an object is a
+grasp, not a collision. Set globally, as motions run in process-module threads."
+  (let ((name (gensym "NAME")) (links (gensym "LINKS")))
+    `(let* ((,name (object-designator-name ,object))
+            (,links (container-links ,name)))
+       (unwind-protect
+            (progn (push ,name urdf-proj:*grasped-objects*)
+                   (setf urdf-proj:*grasp-container-links*
+                         (append ,links urdf-proj:*grasp-container-links*))
+                   ,@body)
+         (setf urdf-proj:*grasped-objects* (remove ,name urdf-proj:*grasped-objects* :count 1)
+               urdf-proj:*grasp-container-links*
+               (nthcdr (length ,links) urdf-proj:*grasp-container-links*))))))
+
+(defmacro with-object-being-placed ((object) &body body)
+  "Run BODY while OBJECT, held, may touch what it is put on (URDF-PROJ:*PLACED-OBJECTS*). Set
+globally, as motions run in process-module threads."
   (let ((name (gensym "NAME")))
     `(let ((,name (object-designator-name ,object)))
        (unwind-protect
-            (progn (push ,name urdf-proj:*grasped-objects*) ,@body)
-         (setf urdf-proj:*grasped-objects* (remove ,name urdf-proj:*grasped-objects* :count 1))))))
+            (progn (push ,name urdf-proj:*placed-objects*) ,@body)
+         (setf urdf-proj:*placed-objects* (remove ,name urdf-proj:*placed-objects* :count 1))))))
 
 (defun pick-up (&key arm grasp object gripper-opening effort trajectory look-pose
                 &allow-other-keys)
@@ -317,8 +354,9 @@ where the object comes to rest on the surface below it, record its new location,
     (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
                         :log-tag 'place)
     (log-pp 'place "Putting")
-    (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
-                        :log-tag 'place)
+    (with-object-being-placed (object)
+      (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
+                          :log-tag 'place))
     (log-pp 'place "Opening gripper")
     (exe:perform (desig:an action (type releasing) (gripper ?arm)))
     (log-pp 'place "Retract grasp in knowledge base")
