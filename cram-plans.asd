@@ -588,8 +588,8 @@ fetching, delivering and transporting, with CRAM's retries and projection pre-ch
   :serial t
   :components ((:file "fd-package")
                (:file "fd-occasions")
-               (:file "fd-navigation")
                (:file "fd-prechecks")
+               (:file "fd-navigation")
                (:file "fd-search")
                (:file "fd-fetch")
                (:file "fd-deliver")

@@ -103,18 +103,32 @@ back x > 0, right y < 0, left y > 0."
       (reference-body designator "ORIENTATION")
       (relation-support-body designator)))
 
+(defun nearest-edge-yaw (body x y)
+  "The yaw (map) of the outward normal of the edge of BODY's box nearest to the map point (X Y)."
+  (multiple-value-bind (hx hy) (body-local-extent body)
+    (multiple-value-bind (cx cy)
+        (body-local-point body
+                          (/ (+ (cl-transforms:x (body-lo body)) (cl-transforms:x (body-hi body))) 2)
+                          (/ (+ (cl-transforms:y (body-lo body)) (cl-transforms:y (body-hi body))) 2))
+      (multiple-value-bind (px py) (body-local-point body x y)
+        (let ((dx (- px cx)) (dy (- py cy)))
+          (+ (body-yaw body)
+             (if (< (- hx (abs dx)) (- hy (abs dy)))
+                 (if (minusp dx) pi 0d0)
+                 (if (minusp dy) (/ pi -2) (/ pi 2)))))))))
+
 (defun support-aligned-costmap (designator orientation)
-  "(orientation support-aligned): the object's x axis along the supporting body's x axis,
-either way."
+  "(orientation support-aligned): the object's x axis along the outward normal of the edge of
+the supporting body nearest to the pose, first pointing out of it, then into it."
   (unless (eq (keyword-of orientation) :support-aligned)
     (error "Location designator ~a: (orientation ~s), expected SUPPORT-ALIGNED." designator orientation))
   (let* ((costmap (make-location-costmap))
-         (body (orientation-body designator))
-         (yaw (body-yaw body))
-         (orientations (list (yaw-quaternion yaw) (yaw-quaternion (+ yaw pi)))))
+         (body (orientation-body designator)))
     (register-orientation-generator costmap (lambda (x y previous)
-                                              (declare (ignore x y previous))
-                                              orientations))
+                                              (declare (ignore previous))
+                                              (let ((yaw (nearest-edge-yaw body x y)))
+                                                (list (yaw-quaternion yaw)
+                                                      (yaw-quaternion (+ yaw pi))))))
     costmap))
 
 ;;; ---- table setting slots -------------------------------------------------------------------------

@@ -50,7 +50,7 @@ Returns the object designator; FETCHING-FAILED when all are used up."
                  (exe:perform (desig:an action (type moving-torso) (joint-angle upper-limit)
                                         (goal (cpoe:torso-at :upper-limit)))))))
           (let ((?location ?robot-location))
-            (exe:perform (desig:an action (type navigating) (location ?location))))
+            (exe:perform (desig:an action (type navigating) (location ?location) (see ?object))))
           (let ((?target ?look-location))
             (exe:perform (desig:an action (type turning-towards) (target ?target))))
           (cpl:with-retry-counters ((regrasp-retries 2))

@@ -48,6 +48,8 @@ location of its type in CONTEXT."
       (fd-error "The navigating action ~s needs a LOCATION designator." d))
     (list (resolved 'navigate :navigating
                     `((:location ,location)
+                      (:see ,(let ((see (prop d :see)))
+                               (and see (object-designator-or-error see :navigating d))))
                       (:park-arms ,(if (eq (prop d :park-arms :unset) :unset) t
                                        (prop d :park-arms))))))))
 

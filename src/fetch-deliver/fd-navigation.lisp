@@ -16,32 +16,39 @@ holds. Checked in the belief state; the robot is put back where it was."
                 (urdf-proj::robot-collisions :robot robot))
       (setf (btr:pose robot) before))))
 
-(defun check-navigating-collisions (location)
+(defun check-navigating-collisions (location &key (accept (constantly t)))
   "The projection pre-check of navigating: the first of up to *NAVIGATION-CHECK-SAMPLES*
-solutions of LOCATION (a location designator) at which the robot is free of collisions (the
-designator of that solution, equated with LOCATION). Signals NAVIGATION-GOAL-IN-COLLISION when none is."
+solutions of LOCATION (a location designator) at which the robot is free of collisions and
+that ACCEPT (a function of the base pose) accepts: the designator of that solution, equated
+with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none."
   (let ((current location))
     (loop repeat *navigation-check-samples*
           while current
           do (let ((pose (handler-case (desig:reference current)
                            (desig:designator-error () (return)))))
                (let ((hits (base-pose-collisions pose)))
-                 (unless hits
+                 (when (and (null hits) (funcall accept pose))
                    (return-from check-navigating-collisions current))
-                 (log-fd :warn 'navigate "Navigation goal ~a collides with ~{~s~^, ~}; trying ~
-                                          the next solution." (urdf-proj::pose-summary pose) hits))
+                 (when hits
+                   (log-fd :warn 'navigate "Navigation goal ~a collides with ~{~s~^, ~}; trying ~
+                                            the next solution." (urdf-proj::pose-summary pose) hits)))
                (setf current (desig:next-solution current))))
     (cpl:fail 'common-fail:navigation-goal-in-collision
               :description (format nil "No solution of ~a is free of collisions for the robot."
                                    location))))
 
-(defun navigate (&key location (park-arms t) &allow-other-keys)
+(defun navigate (&key location (park-arms t) see &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
-(NAVIGATION-GOAL-IN-COLLISION when there is none) and drive there. A low-level navigation
-failure is logged and ignored, as on a real base that plans around obstacles."
+(NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
+given) is visible, and drive there. A low-level navigation failure is logged and ignored, as
+on a real base that plans around obstacles."
   (when park-arms
     (exe:perform (desig:an action (type parking-arms))))
-  (let ((?location (desig:current-desig (check-navigating-collisions location))))
+  (let ((?location (desig:current-desig
+                    (check-navigating-collisions
+                     location :accept (if see
+                                          (lambda (pose) (object-visible-from-p see pose))
+                                          (constantly t))))))
     (handler-case
         (exe:perform (desig:an action (type going) (target ?location)))
       (common-fail:navigation-low-level-failure (e)

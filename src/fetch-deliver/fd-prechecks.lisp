@@ -18,15 +18,21 @@
       (setf (btr:pose robot) base)
       (btr:set-robot-state-from-joints state robot))))
 
+(defparameter *precheck-base-offsets* '(0d0 -0.1d0 0.1d0)
+  "The base offsets (metres) the pre-checks try, fewer than the motions do
+(URDF-PROJ::*BASE-OFFSETS*): a pre-check may reject what the motion would reach, never the
+reverse, and gives up an unreachable pose sooner.")
+
 (defun tcp-poses-reachable-p (arm poses)
-  "True when the tool frame of ARM reaches each of POSES in turn in the belief state, as the
-moving-tcp motion would (base offsets, torso values, collision check); the robot is put back."
+  "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
+moving-tcp motion would (base offsets of *PRECHECK-BASE-OFFSETS*, torso heights, collision
+check); the robot is put back."
   (call-restoring-robot
    (lambda ()
      (handler-case
-         (progn (dolist (pose poses t)
-                  (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose)))
-                                              nil t nil)))
+         (let ((urdf-proj::*base-offsets* *precheck-base-offsets*))
+           (dolist (pose poses t)
+             (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
        (common-fail:manipulation-low-level-failure () nil)))))
 
 (defun trajectory-reachable-p (arm trajectory labels)
@@ -59,7 +65,7 @@ OBJECT-UNREACHABLE when none does."
 (defun check-placing-collisions (object arm target)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
 which ARM puts OBJECT down free of collisions (the designator of that solution); signals
-OBJECT-UNREACHABLE when none does."
+OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pose."
   (let ((current target) (?object object) (?arm arm))
     (loop repeat *placing-check-samples*
           while current
@@ -68,10 +74,31 @@ OBJECT-UNREACHABLE when none does."
                                        :placing (desig:an action (type placing) (object ?object)
                                                           (arm ?arm) (target ?target)))))
                     (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
-               (when (pp-plans::with-object-being-placed (object)
+               (when (pp-plans::with-object-being-placed (object current)
                        (trajectory-reachable-p arm trajectory '(:putting)))
                  (return-from check-placing-collisions current))
                (setf current (desig:next-solution current))))
-    (cpl:fail 'common-fail:object-unreachable
+    (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
+
+(defun object-visible-from-p (object pose)
+  "True when the robot, standing at POSE (map) and looking at OBJECT (an object designator of
+the belief state), sees it (BTR:OBJECT-VISIBLE-P, the neck clamped to its limits). Checked in
+the belief state; the robot is put back."
+  (let* ((name (designator-object-name object))
+         (o (and name (btr:object btr:*current-bullet-world* name))))
+    (or (null o)                        ; nothing to check against
+        (call-restoring-robot
+         (lambda ()
+           (let* ((robot (btr:get-robot-object))
+                  (joints (urdf-proj:neck-joints))
+                  (camera (urdf-proj:camera-frame robot)))
+             (setf (btr:pose robot) (pp-plans:pose-in-map pose))
+             (let ((values (urdf-proj::neck-angles-towards robot joints camera
+                                                             (cl-transforms:origin (btr:pose o)))))
+               (btr:set-robot-state-from-joints
+                (mapcar (lambda (j v) (list j (urdf-proj::clamp-joint robot j v))) joints values)
+                robot))
+             (btr:object-visible-p btr:*current-bullet-world*
+                                   (btr:link-pose robot camera) o)))))))
