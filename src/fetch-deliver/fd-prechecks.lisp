@@ -23,14 +23,19 @@
 (URDF-PROJ::*BASE-OFFSETS*): a pre-check may reject what the motion would reach, never the
 reverse, and gives up an unreachable pose sooner.")
 
+(defparameter *precheck-torso-step* 0.15d0
+  "The step (metres) between the torso heights the pre-checks try, coarser than the motions'
+(URDF-PROJ::*TORSO-STEP*).")
+
 (defun tcp-poses-reachable-p (arm poses)
   "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
-moving-tcp motion would (base offsets of *PRECHECK-BASE-OFFSETS*, torso heights, collision
-check); the robot is put back."
+moving-tcp motion would (base offsets of *PRECHECK-BASE-OFFSETS*, torso heights
+*PRECHECK-TORSO-STEP* apart, collision check); the robot is put back."
   (call-restoring-robot
    (lambda ()
      (handler-case
-         (let ((urdf-proj::*base-offsets* *precheck-base-offsets*))
+         (let ((urdf-proj::*base-offsets* *precheck-base-offsets*)
+               (urdf-proj::*torso-step* *precheck-torso-step*))
            (dolist (pose poses t)
              (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
        (common-fail:manipulation-low-level-failure () nil)))))
