@@ -197,6 +197,7 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :serial t
   :components ((:file "package")
                (:file "urdf")
+               (:file "urdf-tree")
                (:file "world")
                (:file "objects")
                (:file "meshes")
@@ -540,7 +541,7 @@ GET-OBJECT-DESTINATION)."
   :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms" "cram-plans/cram-designators"
                "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-executive"
                "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge"
-               "cram-plans/cram-household-knowledge")
+               "cram-plans/cram-household-knowledge" "cram-plans/cram-urdf-projection")
   :pathname "src/plans/"
   :serial t
   :components ((:file "pp-package")

@@ -48,8 +48,9 @@ URDF-NAME link; else its belief-state object.  An error naming DESIGNATOR when t
     (error "~a: expected an object designator such as (an object (type drawer) (urdf-name ~
             sink-area-left-upper-drawer-main) (part-of iai-kitchen)), got ~s." what designator))
   (multiple-value-bind (env link) (designator-link designator what world)
-    (cond ((and env level (desig:desig-prop-value designator :level))
-           (link-body env (container-level-link env link (desig:desig-prop-value designator :level) what)))
+    (cond ((and env level (designator-level designator))
+           (multiple-value-bind (value invert) (designator-level designator)
+             (link-body env (container-level-link env link value what :invert invert))))
           (env (link-body env link))
           (t (let ((object (object-designator-world-object designator world)))
                (unless object
@@ -66,10 +67,15 @@ URDF-NAME link; else its belief-state object.  An error naming DESIGNATOR when t
 (defun level-link-name-p (name)
   (some (lambda (p) (search p name)) *level-link-patterns*))
 
+(defun urdf-link (env link)
+  "The CL-URDF link named LINK of the environment ENV, or NIL."
+  (let ((urdf (btr:urdf env)))
+    (and urdf (gethash link (cl-urdf:links urdf)))))
+
 (defun child-links (env link)
-  (let* ((urdf (btr:urdf env))
-         (l (and urdf (gethash link (cl-urdf:links urdf)))))
-    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (cl-urdf:child-joints l)))))
+  "The names of the links right below LINK of ENV, in URDF document order."
+  (let ((l (urdf-link env link)))
+    (and l (mapcar (lambda (j) (cl-urdf:name (cl-urdf:child j))) (cl-urdf:child-joints-in-order l)))))
 
 (defun level-links (env link)
   "The level links of the container LINK: its descendants named as levels, found through level
@@ -83,13 +89,23 @@ its block) has none so; then its descendants named as levels that end in _bottom
                                      (any c)))))
     (or (strict link) (any link))))
 
-(defun container-level-link (env link level what)
+(defun designator-level (designator)
+  "(values level invert) of the container DESIGNATOR: its (level L), or its (level-invert L)
+with INVERT true; NIL when it has neither."
+  (multiple-value-bind (level found) (desig:desig-prop-value designator :level)
+    (if found
+        (values level nil)
+        (multiple-value-bind (level found) (desig:desig-prop-value designator :level-invert)
+          (and found (values level t))))))
+
+(defun container-level-link (env link level what &key invert)
   "The link of LEVEL (:TOPMOST, :BOTTOMMOST, :MIDDLE or a positive integer N, the Nth from the
-bottom) among the level links of the container LINK, ordered by the tops of their boxes."
+bottom; from the top with INVERT) among the level links of the container LINK, ordered by the
+tops of their boxes."
   (let* ((levels (sort (mapcar (lambda (l)
                                  (cons l (cl-transforms:z (nth-value 1 (btr:aabb env (btr:link-index env l))))))
                                (level-links env link))
-                       #'< :key #'cdr))
+                       (if invert #'> #'<) :key #'cdr))
          (n (length levels))
          (level (if (integerp level) level (keyword-of level))))
     (when (zerop n)
@@ -106,11 +122,18 @@ bottom) among the level links of the container LINK, ordered by the tops of thei
 ;;; ---- frames -------------------------------------------------------------------------------------
 
 (defun body-local-point (body x y)
-  "The map point (X Y) in BODY's frame, as (values x y)."
-  (let ((p (cl-transforms:transform-point
-            (cl-transforms:transform-inv (cl-transforms:pose->transform (body-pose body)))
-            (cl-transforms:make-3d-vector x y (cl-transforms:z (cl-transforms:origin (body-pose body)))))))
-    (values (cl-transforms:x p) (cl-transforms:y p))))
+  "The map point (X Y) in BODY's frame, as (values x y); BODY's z axis is taken as up."
+  (funcall (body-local-function body) x y))
+
+(defun body-local-function (body)
+  "A function (x y) -> (values x y) from the map into BODY's frame (its z axis taken as up)."
+  (let* ((yaw (body-yaw body)) (c (cos yaw)) (s (sin yaw))
+         (o (cl-transforms:origin (body-pose body)))
+         (ox (cl-transforms:x o)) (oy (cl-transforms:y o)))
+    (declare (type double-float c s ox oy))
+    (lambda (x y)
+      (let ((dx (- (float x 1d0) ox)) (dy (- (float y 1d0) oy)))
+        (values (+ (* c dx) (* s dy)) (- (* c dy) (* s dx)))))))
 
 (defun body-yaw (body)
   "The yaw (radians) of BODY's x axis in the map."

@@ -37,7 +37,7 @@
 (level L) inside CONTAINER the box of that level at its top."
   (let ((body (designator-body container "IN")))
     (box-region-costmap designator body 'in-box
-                        (if (desig:desig-prop-value container :level)
+                        (if (designator-level container)
                             (cl-transforms:z (body-hi body))
                             (+ (cl-transforms:z (body-lo body)) *in-height-above-bottom*)))))
 
@@ -65,15 +65,19 @@
                            (or (assoc (keyword-of s) *sides*)
                                (error "Location designator ~a: (side ~s), expected FRONT, BACK, ~
                                        LEFT, RIGHT or a list of them." designator s)))
-                         (if (listp sides) sides (list sides)))))
+                         (cond ((atom sides) (list sides))
+                               ((null (cdr (last sides))) sides)
+                               (t (error "Location designator ~a: (side ~s), expected a side or a ~
+                                          list of sides." designator sides))))))
     (when (null entries)
       (error "Location designator ~a: (side ~s) names no side." designator sides))
-    (lambda (x y)
-      (multiple-value-bind (lx ly) (body-local-point body x y)
-        (if (every (lambda (e) (let ((v (if (eq (second e) :x) lx ly)))
-                                 (if (eq (third e) '<) (< v 0) (> v 0))))
-                   entries)
-            1d0 0d0)))))
+    (let ((local (body-local-function body)))
+      (lambda (x y)
+        (multiple-value-bind (lx ly) (funcall local x y)
+          (if (every (lambda (e) (let ((v (if (eq (second e) :x) lx ly)))
+                                   (if (eq (third e) '<) (< v 0) (> v 0))))
+                     entries)
+              1d0 0d0))))))
 
 (defun side-costmap (designator sides)
   "(side S) or (side (S1 S2)): the half-planes of the reference body's frame; front x < 0,
@@ -183,11 +187,12 @@ places within *SLOT-DEVIATION* of their centres."
                            (slot-points phx phy :x count (first sizes) (second sizes))
                            (slot-points phy phx :y count (first sizes) (second sizes))))
                (d2 (* *slot-deviation* *slot-deviation*))
+               (local (body-local-function body))
                (costmap (make-location-costmap)))
           (register-cost-function
            costmap
            (lambda (x y)
-             (multiple-value-bind (lx ly) (body-local-point body x y)
+             (multiple-value-bind (lx ly) (funcall local x y)
                (let ((px (+ lx shift-x)) (py (+ ly shift-y)))
                  (if (loop for (sx sy) in points
                            thereis (<= (+ (expt (- px sx) 2) (expt (- py sy) 2)) d2))
@@ -208,7 +213,10 @@ the location is on, in or above (the dishwasher tray).")
 (defun attachment-poses (designator)
   "The map poses of DESIGNATOR's (attachments (NAME ...)) on its reference body."
   (let* ((names (desig:desig-prop-value designator :attachments))
-         (names (if (listp names) names (list names)))
+         (names (cond ((atom names) (list names))
+                      ((null (cdr (last names))) names)
+                      (t (error "Location designator ~a: (attachments ~s), expected a list of ~
+                                 attachment names." designator names))))
          (body (reference-body designator "ATTACHMENTS"))
          (frame (cl-transforms:pose->transform (body-pose body))))
     (loop for name in names

@@ -10,25 +10,15 @@
   "True for an object designator naming a link of an environment (URDF-NAME)."
   (and (typep value 'desig:object-designator) (desig:desig-prop-value value :urdf-name) t))
 
-(defun urdf-link (env link)
-  (let ((urdf (btr:urdf env)))
-    (and urdf (gethash link (cl-urdf:links urdf)))))
-
 (defun handle-link (env link)
-  "The first link below LINK (depth first, URDF order) whose name contains handle, or NIL."
-  (loop for child in (child-links env link)
-        thereis (if (search "handle" child) child (handle-link env child))))
+  "The name of the handle of the part LINK of ENV (CL-URDF:HANDLE-LINK), or NIL."
+  (let* ((l (urdf-link env link)) (handle (and l (cl-urdf:handle-link l))))
+    (and handle (cl-urdf:name handle))))
 
 (defun container-joint (env link)
-  "The joint that moves the container LINK: the first movable joint below it, else the first
-movable joint above it; NIL when there is none."
-  (labels ((movable-p (j) (member (cl-urdf:joint-type j) '(:prismatic :revolute :continuous)))
-           (below (l) (loop for j in (cl-urdf:child-joints l)
-                            thereis (if (movable-p j) j (below (cl-urdf:child j)))))
-           (above (l) (let ((j (cl-urdf:parent-joint l)))
-                        (and j (if (movable-p j) j (above (cl-urdf:parent j)))))))
-    (let ((l (urdf-link env link)))
-      (and l (or (below l) (above l))))))
+  "The CL-URDF joint that moves the part LINK of ENV (CL-URDF:CONNECTING-JOINT), or NIL."
+  (let ((l (urdf-link env link)))
+    (and l (cl-urdf:connecting-joint l))))
 
 (defun environment-part-target (designator)
   "(values point nil) for an object DESIGNATOR naming an environment link: the origin of its

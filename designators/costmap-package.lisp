@@ -44,6 +44,6 @@
    ;; household locations
    #:kitchen-restricted-area #:*restricted-area-function* #:*attachments* #:*in-height-above-bottom*
    #:*table-setting-paddings* #:*slot-sizes* #:*slot-deviation* #:*relation-keys*
-   #:container-level-link #:level-links #:handle-link #:container-joint
+   #:container-level-link #:level-links
    ;; pictures
    #:costmap-heat-map-png #:costmap-heat-map-image))

@@ -58,16 +58,20 @@
   (is (= 0.1 (man-int:get-object-type-gripper-opening :cup)))
   (is (= 0.05 (man-int:get-object-type-gripper-opening :spoon)))
   (is (= 0.02 (man-int:get-object-type-gripper-opening :plate)))
-  (is (= 0.06 (man-int:get-object-type-gripper-opening :container)))
+  (is (member :spoon (objects:household-object-types)))
+  (is (every (lambda (type) (man-int:object-type-subtype-p :household-item type))
+             (objects:household-object-types))
+      "only household items")
   (is-false (man-int:object-rotationally-symmetric-p :bowl))
   (is-true (man-int:object-rotationally-symmetric-p :bottle) "the bottle keeps its knowledge"))
 
 (test cup-and-cereal-grasps-as-cram
   (let ((top (man-int:get-object-type-to-gripper-transform :cup nil :left :top)))
     (is (close-vectors-p (cl-transforms:translation top) '(-0.05 0 0.04)))
-    ;; rotation ZY: the gripper's x along the object's x, its z along the object's -z
-    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation top) (cl-transforms:make-3d-vector 0 0 1))
-                         '(0 0 -1) 1d-9))
+    ;; rotation ZY (CRAM's z-forward gripper frame): the tool frame's x axis, forward between
+    ;; the fingers, along the object's -z
+    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation top) (cl-transforms:make-3d-vector 1 0 0))
+                         '(0 0 -1)))
     (let ((pregrasps (man-int:get-object-type-to-gripper-pregrasp-transforms :cup nil :left :top)))
       (is (close-vectors-p (cl-transforms:translation (first pregrasps)) '(-0.05 0 0.11)))
       (is (close-vectors-p (cl-transforms:translation (second pregrasps)) '(-0.05 0 0.11)))))
@@ -77,20 +81,23 @@
   (is (equal '(:top :top2 :left-side :right-side :back :front) (man-int:object-type-grasps :mug))
       "mugs are cups")
   (let ((flipped (man-int:get-object-type-to-gripper-transform :breakfast-cereal nil :left :front-flipped)))
-    ;; XZ2 rows (0 0 -1) (1 0 0) (0 -1 0): the gripper's z axis along the object's -x (from
-    ;; the front, as XZ) and its x axis along +y (XZ: -y), turned about the approach
-    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 0 0 1))
-                         '(-1 0 0)))
+    ;; XZ2 rows (0 0 -1) (1 0 0) (0 -1 0): approaching along the object's -x (from the front,
+    ;; as XZ), the fingers' plane turned about the approach: the tool's y axis along +y (XZ: -y)
     (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 1 0 0))
+                         '(-1 0 0)))
+    (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation flipped) (cl-transforms:make-3d-vector 0 1 0))
                          '(0 1 0)))
     (is (close-vectors-p (cl-transforms:rotate (cl-transforms:rotation
                                                 (man-int:get-object-type-to-gripper-transform
                                                  :breakfast-cereal nil :left :front))
-                                               (cl-transforms:make-3d-vector 1 0 0))
+                                               (cl-transforms:make-3d-vector 0 1 0))
                          '(0 -1 0))))
   (destructuring-bind (one two) (man-int:get-object-type-lift-offsets :cereal :front)
     (is (close-vectors-p one '(0 0 0.1d0)))
-    (is (close-vectors-p two '(0 0 0.2d0)))))
+    (is (close-vectors-p two '(0 0 0.2d0))))
+  (destructuring-bind (one two) (man-int:get-object-type-lift-offsets :breakfast-cereal :back :shelf)
+    (is (close-vectors-p one '(-0.015 0 0.06)) "out of a shelf: lifted a little")
+    (is (close-vectors-p two '(-0.415 0 0.12)) "then pulled 0.4 m out")))
 
 (test bowl-in-a-drawer-uses-its-own-pregrasp
   (let ((in-drawer (desig:an object (type bowl)
@@ -193,3 +200,25 @@
         "its box's low corner from the origin"))
   (with-household-kitchen ()
     (is (typep (spawn :spoon-1 :spoon '((0 0 2) (0 0 0 1))) 'btr:item) "a :spoon mesh object")))
+
+(defun pregrasp-height (?object)
+  "How far above the grasp pose the first pregrasp pose lies when picking up ?OBJECT from the
+top with the left arm."
+  (let* ((groundings (pp-plans::picking-up-groundings
+                      (desig:an action (type picking-up) (arm left) (grasp top) (object ?object))))
+         (trajectory (desig:desig-prop-value (second (first groundings)) :trajectory)))
+    (flet ((z (label) (cl-transforms:z (cl-transforms:origin
+                                        (first (man-int:get-traj-poses-by-label trajectory label))))))
+      (- (z :reaching) (z :grasping)))))
+
+(test picking-up-a-bowl-from-a-drawer-reaches-from-higher
+  (with-household-kitchen ()
+    (spawn :bowl-1 :bowl '((1.2 0.95 0.47) (0 0 0 1)))
+    (let ((in-drawer (desig:an object (type bowl) (name bowl-1)
+                               (location (desig:a location
+                                                  (in (desig:an object (type drawer)
+                                                                (urdf-name sink-area-left-middle-drawer-main)
+                                                                (part-of iai-kitchen))))))))
+      (is (< (abs (- (pregrasp-height in-drawer) 0.2)) 1d-6) "0.2 m above the grasp in a drawer")
+      (is (< (abs (- (pregrasp-height (desig:an object (type bowl) (name bowl-1))) 0.07)) 1d-6)
+          "0.07 m elsewhere"))))

@@ -78,6 +78,9 @@
       (is (string= "iai_fridge_door_shelf1_bottom"
                    (costmap:container-level-link k "iai_fridge_door" :bottommost "test"))
           "the fridge door's shelves hang under its block")
+      (is (string= "oven_area_area_right_drawer_board_2_link"
+                   (costmap:container-level-link k "oven_area_area_right_drawer_main" 2 "test" :invert t))
+          "(level-invert 2): the second from the top")
       (signals error (costmap:container-level-link k "oven_area_area_right_drawer_main" 7 "test"))
       (signals error (costmap:container-level-link k "sink_area_left_upper_drawer_main" :topmost "test")))
     (let ((milk (man-int:get-object-likely-location :milk :iai-kitchen nil :table-setting)))
@@ -106,7 +109,11 @@
         (is (every (lambda (p) (and (< (second p) 0.31d0) (> (first p) -3.38d0)
                                     (> (dist-xy p '(-3.38 0.31)) 0.3d0)))
                    far)
-            "(side (front right)): y < 0.31 and map x > -3.38 (the table's -y), beyond 0.3 m")))))
+            "(side (front right)): y < 0.31 and map x > -3.38 (the table's -y), beyond 0.3 m"))
+      (let ((yaw (yaw-of (btr:link-pose (kitchen) "dining_area_jokkmokk_table_main"))))
+        (is (every (lambda (pose) (< (abs (sin (* 2 (- (yaw-of pose) yaw)))) 1d-6))
+                   (samples (location `(:on ,table) '(:orientation :support-aligned)) 10))
+            "(on table) (orientation support-aligned): along the table's axes")))))
 
 (test table-setting-bowl-slot
   (with-household-kitchen ()
@@ -142,7 +149,7 @@
           "right of the bowl, within acos 0.9 of the direction")
       (is (every (lambda (p) (< (abs (- (third p) (+ 0.7463 0.0063))) 5d-3)) points) "on the table top")
       (let ((table (yaw-of (btr:link-pose (kitchen) "dining_area_jokkmokk_table_main"))))
-        (is (every (lambda (pose) (< (abs (sin (- (yaw-of pose) table))) 1d-6)) poses)
+        (is (every (lambda (pose) (< (abs (sin (* 2 (- (yaw-of pose) table)))) 1d-6)) poses)
             "aligned with the table's axes")))))
 
 (test cup-right-of-and-behind-the-bowl
@@ -229,3 +236,74 @@
                                           (location `(:above ,d) '(:attachments (:unknown-slot))))
                                          "no error")
                       (error (e) (princ-to-string e)))))))))
+
+(test reachable-for-the-fridge-door
+  (with-household-kitchen ()
+    (let* ((?door (desig:make-designator :object '((:type :fridge) (:urdf-name :iai-fridge-door)
+                                                   (:part-of :iai-kitchen))))
+           (handle (costmap::environment-part-target ?door))
+           (points (sample-points (desig:a location (reachable-for pr2) (arm right) (object ?door)) 30)))
+      (is (string= "iai_fridge_door_joint" (cl-urdf:name (costmap::container-joint (kitchen) "iai_fridge_door"))))
+      (is (< (cl-transforms:v-dist handle (cl-transforms:make-3d-vector 1.195 -0.730 0.990)) 0.02)
+          "the target is the door's handle")
+      (multiple-value-bind (closed open)
+          (costmap::handle-positions-at-limits (kitchen) (costmap::container-joint (kitchen) "iai_fridge_door")
+                                               handle)
+        (is (< (cl-transforms:v-dist open (cl-transforms:make-3d-vector 0.695 -1.371 0.990)) 0.03)
+            "the handle of the open door (pi/2)")
+        (is (every (lambda (p) (and (>= (dist-xy p (xyz closed)) 0.3) (>= (dist-xy p (xyz open)) 0.3)))
+                   points)
+            "clear of the handle at both limits")))))
+
+(test drawer-joint-and-handle-lookup
+  (with-household-kitchen ()
+    (let ((k (kitchen)))
+      (is (string= "sink_area_left_upper_drawer_main_joint"
+                   (cl-urdf:name (costmap::container-joint k "sink_area_left_upper_drawer_main"))))
+      (is (string= "sink_area_dish_washer_door_joint"
+                   (cl-urdf:name (costmap::container-joint k "sink_area_dish_washer_main")))
+          "the dishwasher opens by its door")
+      (is (string= "sink_area_dish_washer_tray_handle_left_side"
+                   (costmap::handle-link k "sink_area_dish_washer_tray_bottom"))
+          "the tray's handle bar, below its frame"))))
+
+(test restricted-area-not-for-objects-on-the-robot
+  (with-household-kitchen ()
+    (let* ((bowl (spawn :bowl-1 :bowl '((0.3 0.0 1.0) (0 0 0 1))))
+           (robot (btr:get-robot-object btr:*current-bullet-world*))
+           (d (desig:a location (reachable-for pr2) (object (desig:an object (type bowl) (name bowl-1))))))
+      (let ((costmap:*restricted-area-function* #'costmap:kitchen-restricted-area))
+        (is-true (costmap::restricted-area-applies-p d))
+        (btr:attach-object robot bowl :link "r_gripper_tool_frame")
+        (is-false (costmap::restricted-area-applies-p d) "not while the robot holds the bowl"))
+      (is-false (costmap::restricted-area-applies-p d) "not unless it is set"))))
+
+(test table-setting-counter-on-the-island
+  (with-household-kitchen ()
+    (spawn :bowl-1 :bowl '((1.0 0.0 2.0) (0 0 0 1)))
+    (let ((points (sample-points (man-int:get-object-destination :bowl :iai-kitchen nil :table-setting-counter))))
+      (multiple-value-bind (lo hi) (link-box "kitchen_island_surface")
+        (is (every (lambda (p) (inside-xy-p p lo hi)) points) "on the kitchen island")
+        (is (every (lambda (p) (< (abs (- (third p) (+ (third hi) 0.0502))) 5d-3)) points))))
+    (let ((points (sample-points (man-int:get-object-likely-location :cup :iai-kitchen nil :table-setting-counter))))
+      (is (every (lambda (p) (< (dist-xy p (xyz (btr:link-pose (kitchen) "sink_area_surface"))) 0.5001)) points)
+          "on the sink counter, within 0.5 m of its origin"))))
+
+(test household-location-bad-values
+  (with-household-kitchen ()
+    (flet ((message (designator)
+             (handler-case (progn (costmap:designator-costmap designator) "no error")
+               (error (e) (princ-to-string e)))))
+      (let ((table (desig:make-designator :object '((:type :counter-top) (:urdf-name :dining-area-jokkmokk-table-main)
+                                                    (:part-of :iai-kitchen))))
+            (d (drawer :sink-area-trash-drawer-main)))
+        (is (search "-3" (message (location `(:on ,table) '(:context :table-setting) '(:object-count -3)))))
+        (is (search "DINNER" (message (location `(:on ,table) '(:context :dinner)))))
+        (is (search "UPSIDE-DOWN" (message (location `(:on ,table) '(:orientation :upside-down)))))
+        (is (search "\"low\"" (message (location `(:above ,d) '(:z-offset "low")))))
+        (is (search "BOWL-9" (message (location `(:on ,table)
+                                                `(:left-of ,(desig:an object (type bowl) (name bowl-9)))))))
+        (is (search "1.5" (message (location `(:on ,table) `(:near ,(desig:an object (type bowl) (name bowl-9)))
+                                             '(:threshold 1.5)))))
+        (is (search "\"sink\"" (message (location '(:in "sink")))))
+        (is (search "(FRONT . RIGHT)" (message (location `(:on ,table) '(:side (:front . :right))))))))))

@@ -35,47 +35,6 @@ object type, or NIL)."
   "The keyword a designator names LINK-NAME with: \"iai_fridge_door\" → :IAI-FRIDGE-DOOR."
   (intern (substitute #\- #\_ (string-upcase link-name)) :keyword))
 
-;;; ---- the URDF tree --------------------------------------------------------------------------
-
-(defun child-joints-in-order (link)
-  "The child joints of the CL-URDF LINK in URDF document order."
-  (reverse (cl-urdf:child-joints link)))
-
-(defun movable-joint-p (joint)
-  (member (cl-urdf:joint-type joint) '(:prismatic :revolute :continuous)))
-
-(defun handle-name-p (link)
-  (search "handle" (cl-urdf:name link)))
-
-(defun first-descendant-link (link predicate)
-  "Depth first below LINK (excluded), in document order: the first link satisfying PREDICATE."
-  (dolist (joint (child-joints-in-order link))
-    (let ((child (cl-urdf:child joint)))
-      (when (funcall predicate child) (return child))
-      (let ((below (first-descendant-link child predicate)))
-        (when below (return below))))))
-
-(defun handle-link-of (link)
-  "The handle of the container LINK: the first link below it named *handle*; when that link has
-links below it, the first of those named *handle* (the tray's handle bar, not its frame)."
-  (let ((handle (if (handle-name-p link) link (first-descendant-link link #'handle-name-p))))
-    (and handle
-         (or (first-descendant-link handle #'handle-name-p) handle))))
-
-(defun first-descendant-joint (link predicate)
-  (dolist (joint (child-joints-in-order link))
-    (when (funcall predicate joint) (return joint))
-    (let ((below (first-descendant-joint (cl-urdf:child joint) predicate)))
-      (when below (return below)))))
-
-(defun connecting-joint-of (link)
-  "The joint that moves the container LINK: the first movable joint below it (a fridge main
-body → its door's hinge), else the first movable joint above it (a drawer → its slide)."
-  (or (first-descendant-joint link #'movable-joint-p)
-      (loop for joint = (cl-urdf:parent-joint link) then (cl-urdf:parent-joint (cl-urdf:parent joint))
-            while joint
-            when (movable-joint-p joint) return joint)))
-
 (defvar *container-links-cache* (make-hash-table :test 'eq :weakness :key :synchronized t)
   "CL-URDF robot → the sorted names of its container links.")
 
@@ -83,11 +42,11 @@ body → its door's hinge), else the first movable joint above it (a drawer → 
   "True for a link moved by its own joint (a drawer, a door, a tray) or carrying a hinged door
 (a fridge, an oven, a dishwasher), with a handle below it."
   (and (or (let ((parent (cl-urdf:parent-joint link)))
-             (and parent (movable-joint-p parent)))
+             (and parent (cl-urdf:movable-joint-p parent)))
            (some (lambda (j) (member (cl-urdf:joint-type j) '(:revolute :continuous)))
                  (cl-urdf:child-joints link)))
-       (handle-link-of link)
-       (connecting-joint-of link)
+       (cl-urdf:handle-link link)
+       (cl-urdf:connecting-joint link)
        t))
 
 (defun container-links (environment)
@@ -138,8 +97,8 @@ unknown (listing the container links), or the link is no container."
         (env-error "URDF-NAME ~s: ~s has no link ~s. Its container links are: ~{~(~a~)~^, ~}."
                    urdf-name (btr:name environment) link-name
                    (mapcar #'link-name->urdf-name (container-links environment))))
-      (let ((handle (handle-link-of link))
-            (joint (connecting-joint-of link)))
+      (let ((handle (cl-urdf:handle-link link))
+            (joint (cl-urdf:connecting-joint link)))
         (unless (container-link-p link)
           (env-error "URDF-NAME ~s: the link ~s of ~s is no container (~:[it has no handle below ~
                       it~;no joint of its own moves it~]). Its container links are: ~{~(~a~)~^, ~}."

@@ -101,3 +101,9 @@ pregrasp-offsets lift-offset &key location-type), for both arms."
   (:back (-0.015 0 0) :-xz ((-0.15 0 0.05) (-0.15 0 0)) (0 0 0.1))
   (:front-flipped (0.015 0 0) :xz2 ((0.15 0 0.05) (0.15 0 0)) (0 0 0.1))
   (:back-flipped (-0.015 0 0) :-xz2 ((-0.15 0 0.05) (-0.15 0 0)) (0 0 0.1)))
+
+;;; Out of a shelf, cereal boxes held from the front or back are lifted a little and pulled
+;;; 0.4 m out before they go up.
+(def-household-grasps (:cereal)
+  (:front nil nil ((0.15 0 0.05) (0.15 0 0)) ((0.015 0 0.06) (0.4 0 0.06)) :location-type :shelf)
+  (:back nil nil ((-0.15 0 0.05) (-0.15 0 0)) ((-0.015 0 0.06) (-0.4 0 0.06)) :location-type :shelf))

@@ -59,19 +59,13 @@ properties ((key value) ...) appended."
                                                (context (eql :table-setting)))
   (location `(:in ,(kitchen-part :fridge :iai-fridge-door environment '(:level :bottommost)))))
 
-(defun cereal-likely-location (type environment)
+(defmethod man-int:get-object-likely-location ((type (eql :cereal)) environment human
+                                               (context (eql :table-setting)))
+  "Cereal boxes (breakfast-cereal too) lie on the top board of the oven drawer."
   (location `(:in ,(kitchen-part :drawer :oven-area-area-right-drawer-main environment
                                  '(:level :topmost)))
             '(:side :back) '(:range 0.1) '(:orientation :support-aligned)
             `(:for ,(for-type type))))
-
-(defmethod man-int:get-object-likely-location ((type (eql :cereal)) environment human
-                                               (context (eql :table-setting)))
-  (cereal-likely-location type environment))
-
-(defmethod man-int:get-object-likely-location ((type (eql :breakfast-cereal)) environment human
-                                               (context (eql :table-setting)))
-  (cereal-likely-location type environment))
 
 (defmethod man-int:get-object-likely-location ((type (eql :household-item)) environment human
                                                (context (eql :table-cleaning)))
@@ -110,10 +104,6 @@ properties ((key value) ...) appended."
   (table-front :milk environment))
 
 (defmethod man-int:get-object-destination ((type (eql :cereal)) environment human
-                                           (context (eql :table-setting)))
-  (table-front type environment))
-
-(defmethod man-int:get-object-destination ((type (eql :breakfast-cereal)) environment human
                                            (context (eql :table-setting)))
   (table-front type environment))
 
@@ -163,11 +153,9 @@ properties ((key value) ...) appended."
 
 (defmethod man-int:get-object-destination ((type (eql :cereal)) environment human
                                            (context (eql :table-cleaning)))
-  (man-int:get-object-likely-location type environment human :table-setting))
-
-(defmethod man-int:get-object-destination ((type (eql :breakfast-cereal)) environment human
-                                           (context (eql :table-cleaning)))
-  (man-int:get-object-likely-location type environment human :table-setting))
+  "Cereal boxes go back where they came from."
+  (man-int:get-object-likely-location (man-int:requested-object-type type) environment human
+                                      :table-setting))
 
 (defmethod man-int:get-object-destination ((type (eql :kitchen-item)) environment human
                                            (context (eql :table-cleaning)))
@@ -182,12 +170,14 @@ properties ((key value) ...) appended."
 
 (defun man-int:get-object-location-type (object)
   "The type (a keyword) of the object the object designator OBJECT lies in, on or above, by
-its LOCATION's IN, ON or ABOVE reference (e.g. :DRAWER); NIL when it does not say."
+its LOCATION's IN, ON or ABOVE reference (e.g. :DRAWER), or by that of the designator it was
+first described by (before perception); NIL when neither says."
   (unless (typep object 'desig:object-designator)
     (error 'man-int:manipulation-knowledge-error
            :format-control "GET-OBJECT-LOCATION-TYPE: expected an object designator, got ~s."
            :format-arguments (list object)))
-  (let ((location (desig:desig-prop-value object :location)))
+  (let ((location (or (desig:desig-prop-value object :location)
+                      (desig:desig-prop-value (desig:first-desig object) :location))))
     (when (typep location 'desig:location-designator)
       (let ((reference (some (lambda (key) (desig:desig-prop-value location key)) '(:in :on :above))))
         (when (typep reference 'desig:object-designator)

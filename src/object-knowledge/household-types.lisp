@@ -21,15 +21,15 @@
 (man-int:define-object-type :breakfast-cereal :cereal)
 (man-int:define-object-type :bowl :kitchen-item)
 
-;;; Efforts: household items 50, milk cartons 20, cereal boxes 45, container handles 50.
-;;; Openings (metres): household items 0.10, cutlery 0.05, plates 0.02, container handles 0.06.
+;;; Efforts: household items 50, milk cartons 20, cereal boxes 45.
+;;; Openings (metres): household items 0.10, cutlery 0.05, plates 0.02.
+;;; (Container handles are gripped as the environment-manipulation layer declares.)
 ;;; None of the household types looks the same after any turn about its z axis.
 (man-int:define-object-type-gripping :kitchen-item :effort 50 :opening 0.1)
 (man-int:define-object-type-gripping :milk :effort 20 :opening 0.1)
 (man-int:define-object-type-gripping :cereal :effort 45 :opening 0.1)
 (man-int:define-object-type-gripping :cutlery :effort 50 :opening 0.05)
 (man-int:define-object-type-gripping :plate :effort 50 :opening 0.02)
-(man-int:define-object-type-gripping :container :effort 50 :opening 0.06)
 
 ;;; Carrying: the bowl always with the arms in :CARRY-TOP (held from above, the gripper
 ;;; pointing down); cups and cereal boxes after a grasp from the top; everything else in :CARRY.

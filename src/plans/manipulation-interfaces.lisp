@@ -128,6 +128,9 @@ the two pregrasp offsets (object frame) and the LIFT-OFFSET vector (base frame).
   (pregrasp-back 0.15d0) (pregrasp-up 0.07d0) (lift 0.07d0)
   pregrasp-offsets lift-offset)
 
+(setf (documentation 'grasp-spec-lift-offset 'function)
+      "NIL, or the two lift offsets (3D vectors, base frame) from the grasp pose.")
+
 (defvar *grasps* (make-hash-table :test 'eq)
   "Object type -> list of GRASP-SPEC in preference order.")
 
@@ -155,7 +158,8 @@ the object frame along which the gripper moves onto the object, with pregrasp po
 PREGRASP-BACK metres back against it (the first also PREGRASP-UP higher) and two lifts by LIFT
 metres; or PREGRASP-OFFSETS ((x y z) [(x y z)]), the two pregrasp poses as offsets of the
 grasp pose in the object frame (one offset: both equal), and LIFT-OFFSET (x y z), the first
-lift in the robot base frame (the second lifts twice as far). With LOCATION-TYPE (a keyword
+lift in the robot base frame (the second lifts as far again), or ((x y z) (x y z)), the first
+lift and the second one on top of it. With LOCATION-TYPE (a keyword
 such as :DRAWER) only PREGRASP-OFFSETS and LIFT-OFFSET are declared, for objects lying in or
 on an object of that type."
   (let ((types (if (listp object-types) object-types (list object-types))))
@@ -196,11 +200,20 @@ on an object of that type."
     (let ((vs (mapcar #'vec offsets)))
       (list (first vs) (or (second vs) (first vs))))))
 
+(defun lift-pair (v)
+  "The two lift offsets of a lift by V: V and twice V."
+  (list v (cl-transforms:v* v 2d0)))
+
 (defun parse-lift-offset (offset type grasp)
-  (when offset
-    (unless (real-triple-p offset)
-      (knowledge-error "Grasp ~s of ~s: expected a lift offset (x y z), got ~s." grasp type offset))
-    (vec offset)))
+  "The two lift offsets (from the grasp pose) of OFFSET: (x y z), a lift by it and then by it
+again, or ((x y z) (x y z)), a lift by the first and then by the second."
+  (cond ((null offset) nil)
+        ((real-triple-p offset) (lift-pair (vec offset)))
+        ((and (listp offset) (= 2 (length offset)) (every #'real-triple-p offset))
+         (let ((first (vec (first offset))))
+           (list first (cl-transforms:v+ first (vec (second offset))))))
+        (t (knowledge-error "Grasp ~s of ~s: expected a lift offset (x y z) or two ((x y z) ~
+                             (x y z)), got ~s." grasp type offset))))
 
 (defun approach-from-offsets (offsets)
   "The unit approach direction towards the grasp from the last pregrasp offset that is not 0."
@@ -228,7 +241,8 @@ on an object of that type."
                                (approach-from-offsets offsets))
                  :pregrasp-back (d back) :pregrasp-up (d up) :lift (d lift)
                  :pregrasp-offsets offsets
-                 :lift-offset (or lift-vector (and offsets (cl-transforms:make-3d-vector 0 0 (d lift)))))))
+                 :lift-offset (or lift-vector
+                                  (and offsets (lift-pair (cl-transforms:make-3d-vector 0 0 (d lift))))))))
       (setf (gethash type *grasps*)
             (append (remove grasp (gethash type *grasps*) :key #'grasp-spec-grasp)
                     (list spec)))
@@ -340,12 +354,11 @@ back against the approach and up, then back at the grasp height."
 (defun get-object-type-lift-offsets (object-type grasp &optional location-type)
   "The offsets (3D vectors, robot base frame) of the two lift poses from the grasp pose of
 GRASP on an OBJECT-TYPE object lying in or on an object of LOCATION-TYPE: the lift offset and
-twice it."
-  (let* ((spec (find-grasp-spec object-type grasp))
-         (v (or (second (grasp-location-variant object-type grasp location-type))
-                (grasp-spec-lift-offset spec)
-                (cl-transforms:make-3d-vector 0 0 (grasp-spec-lift spec)))))
-    (list v (cl-transforms:v* v 2d0))))
+twice it, or the first lift and the first plus the second where two were declared."
+  (let ((spec (find-grasp-spec object-type grasp)))
+    (or (second (grasp-location-variant object-type grasp location-type))
+        (grasp-spec-lift-offset spec)
+        (lift-pair (cl-transforms:make-3d-vector 0 0 (grasp-spec-lift spec))))))
 
 (defun get-object-type-to-gripper-lift-offsets (object-type grasp &optional location-type)
   "The heights (metres, world z) of the two lift poses above the grasp pose."

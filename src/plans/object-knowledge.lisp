@@ -26,8 +26,10 @@
 (man-int:define-object-type :denkmit :household-item)
 
 (defun household-object-types ()
-  "The object types with grasp knowledge in this package."
-  (remove :household-item (man-int:known-object-types)))
+  "The household object types: every declared subtype of :HOUSEHOLD-ITEM."
+  (remove-if-not (lambda (type) (and (not (eq type :household-item))
+                                     (man-int:object-type-subtype-p :household-item type)))
+                 (man-int:known-object-types)))
 
 ;;; Gripping: default effort 50 and opening 0.10 m.
 (man-int:define-object-type-gripping :household-item :effort 50 :opening 0.1)

@@ -71,6 +71,7 @@
                        (t (or (free-arms) (pp-error "No free arm to pick up ~s." name))))))
          (object-pose (object-pose-in-map object))
          (in-base (relative-transform (robot-pose-in-map) object-pose))
+         (location-type (man-int:get-object-location-type object))
          (opening (man-int:get-object-type-gripper-opening type))
          (effort (man-int:get-object-type-gripping-effort type)))
     (loop for arm in arms
@@ -81,7 +82,8 @@
                                                 (list g))
                                          (man-int:get-action-grasps type arm in-base)))
                       for trajectory = (man-int:get-action-trajectory
-                                        :picking-up arm grasp type object-pose)
+                                        :picking-up arm grasp type object-pose
+                                        :location-type location-type)
                       collect (resolved 'pick-up :picking-up
                                         `((:arm ,arm) (:grasp ,grasp) (:object ,object)
                                           (:gripper-opening ,opening) (:effort ,effort)
