@@ -49,7 +49,9 @@
   :serial t
   :components ((:file "utilities-package")
                (:file "lazy")
-               (:file "bindings")))
+               (:file "bindings")
+               (:file "patmatch")
+               (:file "threads")))
 
 (defsystem "cram-plans/cram-prolog"
   :description "The CRAM-dialect Prolog engine, compiled to Lisp closures (package PROLOG)."
@@ -356,7 +358,9 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
 (defsystem "cram-plans/tests/utilities"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-utilities")
   :pathname "tests/"
-  :components ((:file "utilities-tests")))
+  :serial t
+  :components ((:file "utilities-tests")
+               (:file "cut-pattern-tests")))
 
 (defsystem "cram-plans/tests/prolog"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-prolog")

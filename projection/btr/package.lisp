@@ -13,7 +13,6 @@
   (:nicknames :btr)
   (:use :cl :cram-prolog :cram-utilities)
   (:local-nicknames (:native :cram-native))
-  (:shadow #:step)
   (:export
    ;; worlds
    #:bt-world #:bt-reasoning-world #:*current-bullet-world* #:world-handle #:world
