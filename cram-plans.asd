@@ -149,6 +149,7 @@
   :components ((:file "costmap-package")
                (:file "costmap-metadata")
                (:file "costmap-grid")
+               (:file "costmap-values")
                (:file "costmap-functions")
                (:file "costmap-belief")
                (:file "costmap-targets")
@@ -392,7 +393,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "language-tests")
-               (:file "language-tree-tests")))
+               (:file "language-tree-tests")
+               (:file "cpl-api-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
@@ -447,7 +449,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "costmap-tests")
-               (:file "costmap-kitchen-tests")))
+               (:file "costmap-kitchen-tests")
+               (:file "costmap-api-tests")))
 
 (defsystem "cram-plans/tests/bad-input"
   :description "The table-driven bad-input suite of every layer a user touches."

@@ -122,6 +122,10 @@ anywhere else is an error."
                      (t (values nil nil))))))
     (u a b bindings)))
 
+(defun unify-p (a b &optional bindings)
+  "True when the patterns A and B unify under BINDINGS (see UNIFY)."
+  (nth-value 1 (unify a b bindings)))
+
 (defun add-bdg (var value bindings)
   "Add the binding of VAR to VALUE to BINDINGS, unifying with an existing value of VAR.
 Returns (values new-bindings t), or (values nil nil) when VAR is bound to something else."

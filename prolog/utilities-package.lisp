@@ -19,6 +19,6 @@
    #:thread-alive-p #:replace-all
    ;; bindings
    #:is-var #:is-anonymous-var #:var-value #:is-bound #:is-ground #:add-bdg
-   #:unify #:substitute-vars #:vars-in #:rename-vars
+   #:unify #:unify-p #:substitute-vars #:vars-in #:rename-vars
    #:with-vars-bound #:with-vars-strictly-bound #:unbound-variable-error
    #:unbound-variable-error-variable))

@@ -4,6 +4,11 @@
   (:nicknames :cpl :cpl-impl)
   (:use :cl)
   (:shadow #:sleep)
+  ;; every external symbol of COMMON-LISP (but SLEEP), so that (:use :cpl) alone is a working
+  ;; package, as in CRAM
+  (:export . #.(let ((names '()))
+                 (do-external-symbols (s :common-lisp (sort names #'string<))
+                   (unless (string= (symbol-name s) "SLEEP") (push (symbol-name s) names)))))
   (:export
    ;; tasks and plan macros
    #:top-level #:named-top-level #:seq #:par #:pursue #:try-all
