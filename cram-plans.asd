@@ -369,7 +369,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "prolog-tests")
                (:file "prolog-builtin-tests")
-               (:file "prolog-engine-tests")))
+               (:file "prolog-engine-tests")
+               (:file "prolog-api-tests")))
 
 (defsystem "cram-plans/tests/transforms"
   :depends-on ("cram-plans/tests/base" "cram-plans/cl-transforms")
