@@ -196,6 +196,7 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :serial t
   :components ((:file "package")
                (:file "urdf")
+               (:file "urdf-writer")
                (:file "world")
                (:file "objects")
                (:file "meshes")
@@ -377,7 +378,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "transforms-tests")
-               (:file "transforms-tf-tests")))
+               (:file "transforms-tf-tests")
+               (:file "transforms-quaternion-tests")))
 
 (defsystem "cram-plans/tests/native"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-native" "sb-posix")

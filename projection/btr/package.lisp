@@ -7,7 +7,7 @@
            #:link #:joint #:parent #:child #:joint-type #:origin #:axis #:limits
            #:lower #:upper #:mimic #:collision #:visual
            #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names
-           #:rerooted-source))
+           #:rerooted-source #:generate-urdf-string))
 
 (defpackage :cram-bullet-reasoning
   (:nicknames :btr)

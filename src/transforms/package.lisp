@@ -17,7 +17,7 @@
    #:v-norm #:v-dist #:normalize-vector #:interpolate-vector
    ;; quaternions
    #:quaternion #:quaternion-p #:make-quaternion #:make-identity-rotation #:copy-quaternion
-   #:q* #:q-inv #:q= #:q-dot #:normalize #:is-normalized #:rotate
+   #:q* #:q-inv #:q= #:q-dot #:q+ #:q- #:q-norm #:normalize #:is-normalized #:rotate
    #:axis-angle->quaternion #:quaternion->axis-angle
    #:euler->quaternion #:quaternion->euler #:get-yaw #:yaw
    #:angle-between-quaternions #:normalize-angle #:slerp
