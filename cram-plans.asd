@@ -205,7 +205,10 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                (:file "pictures")
                (:file "facts")
                (:file "utils")
-               (:file "costmap-vis")))
+               (:file "costmap-vis")
+               (:file "world-api")
+               (:file "bounding-boxes")
+               (:file "timeline")))
 
 (defsystem "cram-plans/cram-common-designators"
   :description "MOTION-GROUNDING rules of the robot-independent motions and WAIT-PM (COMMON-DESIG)."
@@ -424,7 +427,9 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
 (defsystem "cram-plans/tests/btr"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")
   :pathname "tests/"
-  :components ((:file "btr-tests")))
+  :serial t
+  :components ((:file "btr-tests")
+               (:file "btr-api-tests")))
 
 (defsystem "cram-plans/tests/scripts"
   :depends-on ("cram-plans/tests/base")

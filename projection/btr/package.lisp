@@ -46,7 +46,13 @@
    #:*visibility-threshold* #:camera-pose
    ;; Prolog interface names
    #:retract #:assert #:attached #:object-pose-on #:link
-   #:object-bottom-pose #:item #:robot-object #:with-stored-world))
+   #:object-bottom-pose #:item #:robot-object #:with-stored-world
+   ;; more of CRAM's API
+   #:with-current-bullet-world #:prolog-?w #:?w #:clear-bullet-world #:obj-pose-on
+   #:robot-attached-objects-in-collision #:calculate-bb-dims #:merge-bounding-boxes
+   #:event #:make-event #:event-world-state #:timestamp #:timeline #:timeline-init
+   #:timeline-advance #:timeline-events #:timeline-current-world-state #:timeline-lookup
+   #:*current-timeline* #:with-timeline #:occurs-in #:holds-at))
 
 (defpackage :cram-bullet-reasoning-utilities
   (:nicknames :btr-utils)
