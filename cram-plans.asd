@@ -133,12 +133,13 @@
 
 (defsystem "cram-plans/cram-robot-interfaces"
   :description "Interface predicates of robot descriptions and the current robot (package ROB-INT)."
-  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-designators")
   :pathname "designators/"
   :serial t
   :components ((:file "robot-interfaces-package")
                (:file "robot-interfaces")
-               (:file "robot-interfaces-facts")))
+               (:file "robot-interfaces-facts")
+               (:file "robot-interfaces-designators")))
 
 (defsystem "cram-plans/cram-location-costmap"
   :description "Location costmaps and their metadata predicates (package COSTMAP)."
@@ -409,7 +410,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "robots-tests")
                (:file "robots-pepper-tests")
-               (:file "robots-urdf-tests")))
+               (:file "robots-urdf-tests")
+               (:file "robot-interfaces-api-tests")))
 
 (defsystem "cram-plans/tests/designators"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-designators")
@@ -422,7 +424,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-executive")
   :pathname "tests/"
   :serial t
-  :components ((:file "executive-tests")))
+  :components ((:file "executive-tests")
+               (:file "location-solution-tests")))
 
 (defsystem "cram-plans/tests/btr"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")

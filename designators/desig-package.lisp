@@ -21,6 +21,7 @@
    ;; equation chains
    #:equate #:desig-equal #:first-desig #:current-desig #:newest-effective-designator
    #:get-equal-designators #:parent #:successor #:effective #:timestamp #:designator-data
+   #:data
    ;; grounding
    #:reference #:resolve-designator #:next-solution #:reset #:designator-solutions
    #:*default-role* #:designator-error #:designator-error-designator

@@ -100,6 +100,13 @@ keyword keys, of something the robot acts on. Designators describing the same en
 linked into an equation chain (PARENT / SUCCESSOR); REFERENCE grounds a designator and caches
 the result in its data."))
 
+(defun data (designator)
+  "The data of DESIGNATOR (CRAM's name for DESIGNATOR-DATA): the reference cached in it by
+REFERENCE, or the object data perception gave it; NIL before it is grounded."
+  (unless (typep designator 'designator)
+    (error "DESIG:DATA: ~s is not a designator." designator))
+  (designator-data designator))
+
 (setf (documentation 'description 'function)
       "The ordered list of (KEY VALUE...) entries of a designator; keys are keywords."
       (documentation 'quantifier 'function)

@@ -50,3 +50,10 @@
     (cl-transforms:make-transform (cl-transforms:make-3d-vector 0 0 0) 0))
   (signals cl-transforms:transform-input-error
     (cl-transforms:make-transform (cl-transforms:make-3d-vector 0 0 0) "identity")))
+
+(test angle-around-map-z-is-a-yaw
+  (let ((q (cram-tf:angle-around-map-z (/ pi 3))))
+    (is (near (/ pi 3) (cl-transforms:get-yaw q)))
+    (is (near 0 (cl-transforms:x q)))
+    (is (cl-transforms:q= (cl-transforms:make-identity-rotation) (cram-tf:angle-around-map-z 0))))
+  (signals cl-transforms:transform-input-error (cram-tf:angle-around-map-z "north")))

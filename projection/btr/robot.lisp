@@ -320,3 +320,13 @@ model of; NIL when none is."
           (and rob-int:*robot-urdf* (match (cl-urdf:name rob-int:*robot-urdf*)))))))
 
 (setf rob-int::*loaded-robot-name-function* 'loaded-robot-name)
+
+(defun loaded-environment-name ()
+  "The name of the environment object of the current world, else the keyword of the name of
+ROB-INT:*ENVIRONMENT-URDF*; NIL when there is neither."
+  (let ((environment (get-environment-object)))
+    (cond (environment (name environment))
+          (rob-int:*environment-urdf*
+           (rob-int:urdf-name->robot-name (cl-urdf:name rob-int:*environment-urdf*))))))
+
+(setf rob-int:*environment-name-function* 'loaded-environment-name)
