@@ -432,7 +432,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "btr-tests")
-               (:file "btr-api-tests")))
+               (:file "btr-api-tests")
+               (:file "btr-errors-tests")))
 
 (defsystem "cram-plans/tests/scripts"
   :depends-on ("cram-plans/tests/base")

@@ -180,7 +180,14 @@ table name → value. All joints are set at once, then links and attached object
 ;;; ---- attachments -------------------------------------------------------------------------------
 
 (defun ensure-object (world designator)
-  (if (typep designator 'object) designator (object-or-fail world designator)))
+  "The object DESIGNATOR (an object, or the name of one in WORLD); an object of WORLD that was
+removed from it is an error naming it."
+  (cond ((typep designator 'object)
+         (when (and (eq (world designator) world)
+                    (not (eq (object world (name designator)) designator)))
+           (object-gone-error designator "Bullet world query"))
+         designator)
+        (t (object-or-fail world designator))))
 
 (defun attach-object (parent object &key link loose grasp)
   "Attach OBJECT (an object or name) to PARENT: a robot-object at LINK (a link name), or an item.
@@ -216,8 +223,10 @@ OBJECT (the list of attached objects for a list)."
                         (unless link (btr-fail "ATTACH-OBJECT: attaching ~s to ~s needs :link" (name object) (name parent)))
                         (link-index parent link))
                        (t -1))))
-    (native:attach (world-handle world) (object-handle object) (object-handle parent)
-                   :link link-i :loose loose)
+    (with-live-object (parent 'attach-object)
+      (with-live-object (object 'attach-object)
+        (native:attach (world-handle world) (object-handle object) (object-handle parent)
+                       :link link-i :loose loose)))
     (when (typep parent 'robot-object)
       (setf (%attached parent)
             (append (remove-if (lambda (a) (and (eq (first a) (name object)) (equal (second a) link)))
@@ -235,10 +244,12 @@ OBJECT (the list of attached objects for a list)."
                        (%attached parent))))
     (unless (and (typep parent 'robot-object)
                  (find (name object) (%attached parent) :key #'first))
-      (native:detach (world-handle world) (object-handle object) (object-handle parent))
-      (unless (typep parent 'robot-object)
-        ;; an attachment between two items holds whichever way it was made
-        (native:detach (world-handle world) (object-handle parent) (object-handle object))))
+      (with-live-object (parent 'detach-object)
+        (with-live-object (object 'detach-object)
+          (native:detach (world-handle world) (object-handle object) (object-handle parent))
+          (unless (typep parent 'robot-object)
+            ;; an attachment between two items holds whichever way it was made
+            (native:detach (world-handle world) (object-handle parent) (object-handle object))))))
     object))
 
 (defun detach-all-objects (parent)
