@@ -575,4 +575,4 @@ bottles."
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
-  :components ((:file "plans-tests") (:file "plans-placing-tests")))
+  :components ((:file "plans-tests") (:file "plans-placing-tests") (:file "scene-layout-tests")))
