@@ -492,7 +492,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
-               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"))
+               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
+               "cram-plans/tests/viewer-report"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -513,6 +514,12 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "yason" "sb-posix")
   :pathname "tests/"
   :components ((:file "viewer-tests")))
+
+(defsystem "cram-plans/tests/viewer-report"
+  :description "The viewer's /report endpoint, without a browser."
+  :depends-on ("cram-plans/tests/base" "cram-plans/viewer" "sb-bsd-sockets")
+  :pathname "tests/"
+  :components ((:file "viewer-report-tests")))
 
 (defsystem "cram-plans/tests/seeds"
   :description "Seed replays: tests/seeds/seed-NNN.lisp, each in a fresh SBCL."
