@@ -83,6 +83,15 @@
                (:file "transformer")
                (:file "cram-tf")))
 
+(defsystem "cram-plans/cram-math"
+  :description "Double-float matrices, sampling from distributions, the multivariate Gaussian,
+points in polygons (package CRAM-MATH, CMA)."
+  :pathname "src/math/"
+  :serial t
+  :components ((:file "package")
+               (:file "matrix")
+               (:file "sampling")))
+
 (defsystem "cram-plans/cram-native"
   :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, OSMesa, libpng)."
   :depends-on ("cffi" "alexandria")
@@ -243,7 +252,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :description "CRAM plans with a Bullet belief state for projection: all layers."
   :version "0.1.0"
   :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms" "cram-plans/cram-native"
-               "cram-plans/cram-language" "cram-plans/cram-common-failures"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-math"
                "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
                "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description"
                "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
@@ -367,6 +376,11 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "utilities-tests")
                (:file "cut-pattern-tests")))
+
+(defsystem "cram-plans/tests/cram-math"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-math")
+  :pathname "tests/"
+  :components ((:file "cram-math-tests")))
 
 (defsystem "cram-plans/tests/prolog"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-prolog")
@@ -493,7 +507,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/viewer-report"))
+               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
