@@ -118,7 +118,8 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "language")
                (:file "goals")
                (:file "fluents")
-               (:file "task-tree-output")))
+               (:file "task-tree-output")
+               (:file "task-interface")))
 
 (defsystem "cram-plans/cram-common-failures"
   :description "The failure classes robot plans signal (COMMON-FAIL) and the retry-with-solutions strategies."
@@ -415,7 +416,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "language-tests")
                (:file "language-tree-tests")
-               (:file "cpl-api-tests")))
+               (:file "cpl-api-tests")
+               (:file "cpl-tasks-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"

@@ -18,6 +18,11 @@
    #:current-task-p #:*inherited-specials* #:with-evaporation-deferred
    #:not-inside-plan-error #:nested-top-level-error
    #:task-exit-error #:task-exit-task-name
+   ;; the task interface
+   #:status #:result #:task-dead #:task-alive #:task-running-p #:task-dead-p #:task-failed-p
+   #:task-done-p #:join-task #:toplevel-task #:tagged-task #:with-tags #:partial-order
+   #:suspend #:wake-up #:on-suspension #:with-task-suspended
+   #:sleep* #:fl-pulsed #:fl-value-changed #:def-cpl-parameter
    ;; failures
    #:plan-failure #:simple-plan-failure #:composite-failure #:composite-failures
    #:common-lisp-error-envelope #:envelop-error
