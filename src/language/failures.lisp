@@ -63,10 +63,6 @@ out (it defaults to the format string \"Plan failure.\")."))
             (apply dispatch arguments)
             (funcall dispatch "Plan failure."))))))
 
-;; FAIL may be called without arguments: say so to the compiler, which would otherwise take the
-;; generic function's lambda list for its own and warn about such calls
-(declaim (ftype (function (&optional t &rest t) *) fail))
-
 (defgeneric fail (datum &rest arguments)
   (:generic-function-class failure-generic-function)
   (:documentation "Signal a plan failure. DATUM and ARGUMENTS are a format control string and its
