@@ -104,9 +104,16 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "native-render")
                (:file "native-ik")))
 
+(defsystem "cram-plans/cram-walker"
+  :description "A code walker that expands plans into plan trees (package CRAM-WALKER, WALKER)."
+  :pathname "src/walker/"
+  :serial t
+  :components ((:file "package")
+               (:file "walker")))
+
 (defsystem "cram-plans/cram-language"
   :description "The CRAM plan language (CPL): tasks, PAR/PURSUE/TRY-*, failures, fluents, the task tree, logging."
-  :depends-on ("alexandria" "bordeaux-threads" "yason")
+  :depends-on ("alexandria" "bordeaux-threads" "yason" "cram-plans/cram-walker")
   :pathname "src/language/"
   :serial t
   :components ((:file "package")
@@ -417,7 +424,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "language-tests")
                (:file "language-tree-tests")
                (:file "cpl-api-tests")
-               (:file "cpl-tasks-tests")))
+               (:file "cpl-tasks-tests")
+               (:file "cram-walker-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"

@@ -78,9 +78,6 @@ The default method handles strings, condition objects and condition class names.
   (:method ((datum t) &rest arguments)
     (signal-failure (coerce-to-failure (cons datum arguments)))))
 
-(define-compiler-macro fail (&whole form &rest arguments)
-  (if arguments form '(fail "Plan failure.")))
-
 (defun signal-failure (condition)
   "Signal the failure CONDITION the way FAIL does; never returns."
   (if (and *current-task* (typep condition 'plan-failure))

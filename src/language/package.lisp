@@ -4,6 +4,8 @@
   (:nicknames :cpl :cpl-impl)
   (:use :cl)
   (:shadow #:sleep)
+  (:import-from :cram-walker #:plan-tree-node #:plan-tree-node-sexp #:plan-tree-node-parent
+                #:plan-tree-node-children #:plan-tree-node-path #:find-plan-node #:expand-plan)
   ;; every external symbol of COMMON-LISP (but SLEEP), so that (:use :cpl) alone is a working
   ;; package, as in CRAM
   (:export . #.(let ((names '()))
@@ -23,6 +25,9 @@
    #:task-done-p #:join-task #:toplevel-task #:tagged-task #:with-tags #:partial-order
    #:suspend #:wake-up #:on-suspension #:with-task-suspended
    #:sleep* #:fl-pulsed #:fl-value-changed #:def-cpl-parameter
+   #:def-plan #:def-top-level-plan
+   #:plan-tree-node #:plan-tree-node-sexp #:plan-tree-node-parent #:plan-tree-node-children
+   #:plan-tree-node-path #:find-plan-node #:expand-plan
    ;; failures
    #:plan-failure #:simple-plan-failure #:composite-failure #:composite-failures
    #:common-lisp-error-envelope #:envelop-error
