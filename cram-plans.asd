@@ -442,7 +442,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "designators-tests")
-               (:file "designators-grounding-tests")))
+               (:file "designators-grounding-tests")
+               (:file "designator-classes-tests")))
 
 (defsystem "cram-plans/tests/executive"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-executive")

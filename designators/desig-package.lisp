@@ -13,6 +13,7 @@
    #:designator #:designator-p #:action-designator #:motion-designator
    #:location-designator #:object-designator #:human-designator
    #:register-designator-class #:find-designator-class #:designator-type
+   #:normalize-designator-description
    #:make-designator #:a #:an #:all
    ;; description access
    #:description #:properties #:quantifier #:desig-prop-value #:desig-prop-values
