@@ -67,6 +67,7 @@
                (:file "builtins")
                (:file "library")
                (:file "query")
+               (:file "rete")
                (:file "documentation")))
 
 (defsystem "cram-plans/cl-transforms"
@@ -397,7 +398,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "prolog-tests")
                (:file "prolog-builtin-tests")
                (:file "prolog-engine-tests")
-               (:file "prolog-api-tests")))
+               (:file "prolog-api-tests")
+               (:file "prolog-rete-tests")))
 
 (defsystem "cram-plans/tests/transforms"
   :depends-on ("cram-plans/tests/base" "cram-plans/cl-transforms")

@@ -48,6 +48,12 @@ Decisions on CRAM's quirks:
    #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
    #:fact-group-names #:fact-group-clauses #:remove-fact-group #:predicate-clauses
    #:database-generation #:filter-bindings #:unify #:unify-p #:?_
+   ;; RETE: working memory and productions
+   #:clear-alpha-network #:rete-assert #:rete-retract #:with-facts-asserted #:object-id
+   #:rete-holds #:alpha-network-size #:rete-prove
+   #:def-production #:register-production #:clear-productions #:remove-production
+   #:with-productions #:register-production-handler #:remove-production-handler
+   #:with-production-handlers
    #:add-fact #:remove-facts #:predicate
    ;; native predicates
    #:def-native-predicate #:solve-continue #:unify-terms #:unify-each #:deref-term
