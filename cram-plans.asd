@@ -203,7 +203,9 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "occasions-events")
                (:file "plan-events")
                (:file "process-modules")
+               (:file "asynchronous-process-modules")
                (:file "projection")
+               (:file "projection-clocks")
                (:file "perform")))
 
 (defsystem "cram-plans/cram-bullet-reasoning"
@@ -452,7 +454,9 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "executive-tests")
-               (:file "location-solution-tests")))
+               (:file "location-solution-tests")
+               (:file "process-module-tests")
+               (:file "projection-clock-tests")))
 
 (defsystem "cram-plans/tests/btr"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")
