@@ -49,7 +49,9 @@
   :serial t
   :components ((:file "utilities-package")
                (:file "lazy")
-               (:file "bindings")))
+               (:file "bindings")
+               (:file "patmatch")
+               (:file "threads")))
 
 (defsystem "cram-plans/cram-prolog"
   :description "The CRAM-dialect Prolog engine, compiled to Lisp closures (package PROLOG)."
@@ -65,6 +67,7 @@
                (:file "builtins")
                (:file "library")
                (:file "query")
+               (:file "rete")
                (:file "documentation")))
 
 (defsystem "cram-plans/cl-transforms"
@@ -81,6 +84,15 @@
                (:file "transformer")
                (:file "cram-tf")))
 
+(defsystem "cram-plans/cram-math"
+  :description "Double-float matrices, sampling from distributions, the multivariate Gaussian,
+points in polygons (package CRAM-MATH, CMA)."
+  :pathname "src/math/"
+  :serial t
+  :components ((:file "package")
+               (:file "matrix")
+               (:file "sampling")))
+
 (defsystem "cram-plans/cram-native"
   :description "CFFI binding of the C shim libcram_native.so (Bullet, urdfdom, assimp, KDL, OSMesa, libpng)."
   :depends-on ("cffi" "alexandria")
@@ -93,9 +105,16 @@
                (:file "native-render")
                (:file "native-ik")))
 
+(defsystem "cram-plans/cram-walker"
+  :description "A code walker that expands plans into plan trees (package CRAM-WALKER, WALKER)."
+  :pathname "src/walker/"
+  :serial t
+  :components ((:file "package")
+               (:file "walker")))
+
 (defsystem "cram-plans/cram-language"
   :description "The CRAM plan language (CPL): tasks, PAR/PURSUE/TRY-*, failures, fluents, the task tree, logging."
-  :depends-on ("alexandria" "bordeaux-threads" "yason")
+  :depends-on ("alexandria" "bordeaux-threads" "yason" "cram-plans/cram-walker")
   :pathname "src/language/"
   :serial t
   :components ((:file "package")
@@ -107,7 +126,8 @@
                (:file "language")
                (:file "goals")
                (:file "fluents")
-               (:file "task-tree-output")))
+               (:file "task-tree-output")
+               (:file "task-interface")))
 
 (defsystem "cram-plans/cram-common-failures"
   :description "The failure classes robot plans signal (COMMON-FAIL) and the retry-with-solutions strategies."
@@ -131,12 +151,13 @@
 
 (defsystem "cram-plans/cram-robot-interfaces"
   :description "Interface predicates of robot descriptions and the current robot (package ROB-INT)."
-  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities")
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-designators")
   :pathname "designators/"
   :serial t
   :components ((:file "robot-interfaces-package")
                (:file "robot-interfaces")
-               (:file "robot-interfaces-facts")))
+               (:file "robot-interfaces-facts")
+               (:file "robot-interfaces-designators")))
 
 (defsystem "cram-plans/cram-location-costmap"
   :description "Location costmaps and their metadata predicates (package COSTMAP)."
@@ -147,6 +168,7 @@
   :components ((:file "costmap-package")
                (:file "costmap-metadata")
                (:file "costmap-grid")
+               (:file "costmap-values")
                (:file "costmap-functions")
                (:file "costmap-belief")
                (:file "costmap-targets")
@@ -185,7 +207,9 @@
                (:file "occasions-events")
                (:file "plan-events")
                (:file "process-modules")
+               (:file "asynchronous-process-modules")
                (:file "projection")
+               (:file "projection-clocks")
                (:file "perform")))
 
 (defsystem "cram-plans/cram-bullet-reasoning"
@@ -198,6 +222,7 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :components ((:file "package")
                (:file "urdf")
                (:file "urdf-tree")
+               (:file "urdf-writer")
                (:file "world")
                (:file "objects")
                (:file "meshes")
@@ -206,7 +231,10 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
                (:file "pictures")
                (:file "facts")
                (:file "utils")
-               (:file "costmap-vis")))
+               (:file "costmap-vis")
+               (:file "world-api")
+               (:file "bounding-boxes")
+               (:file "timeline")))
 
 (defsystem "cram-plans/cram-common-designators"
   :description "MOTION-GROUNDING rules of the robot-independent motions and WAIT-PM (COMMON-DESIG)."
@@ -240,7 +268,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :description "CRAM plans with a Bullet belief state for projection: all layers."
   :version "0.1.0"
   :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms" "cram-plans/cram-native"
-               "cram-plans/cram-language" "cram-plans/cram-common-failures"
+               "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-math"
                "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
                "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description"
                "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
@@ -365,7 +393,14 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
 (defsystem "cram-plans/tests/utilities"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-utilities")
   :pathname "tests/"
-  :components ((:file "utilities-tests")))
+  :serial t
+  :components ((:file "utilities-tests")
+               (:file "cut-pattern-tests")))
+
+(defsystem "cram-plans/tests/cram-math"
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-math")
+  :pathname "tests/"
+  :components ((:file "cram-math-tests")))
 
 (defsystem "cram-plans/tests/prolog"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-prolog")
@@ -373,14 +408,17 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "prolog-tests")
                (:file "prolog-builtin-tests")
-               (:file "prolog-engine-tests")))
+               (:file "prolog-engine-tests")
+               (:file "prolog-api-tests")
+               (:file "prolog-rete-tests")))
 
 (defsystem "cram-plans/tests/transforms"
   :depends-on ("cram-plans/tests/base" "cram-plans/cl-transforms")
   :pathname "tests/"
   :serial t
   :components ((:file "transforms-tests")
-               (:file "transforms-tf-tests")))
+               (:file "transforms-tf-tests")
+               (:file "transforms-quaternion-tests")))
 
 (defsystem "cram-plans/tests/native"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-native" "sb-posix")
@@ -397,7 +435,10 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "language-tests")
-               (:file "language-tree-tests")))
+               (:file "language-tree-tests")
+               (:file "cpl-api-tests")
+               (:file "cpl-tasks-tests")
+               (:file "cram-walker-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
@@ -406,25 +447,33 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "robots-tests")
                (:file "robots-pepper-tests")
-               (:file "robots-urdf-tests")))
+               (:file "robots-urdf-tests")
+               (:file "robot-interfaces-api-tests")))
 
 (defsystem "cram-plans/tests/designators"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-designators")
   :pathname "tests/"
   :serial t
   :components ((:file "designators-tests")
-               (:file "designators-grounding-tests")))
+               (:file "designators-grounding-tests")
+               (:file "designator-classes-tests")))
 
 (defsystem "cram-plans/tests/executive"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-executive")
   :pathname "tests/"
   :serial t
-  :components ((:file "executive-tests")))
+  :components ((:file "executive-tests")
+               (:file "location-solution-tests")
+               (:file "process-module-tests")
+               (:file "projection-clock-tests")))
 
 (defsystem "cram-plans/tests/btr"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")
   :pathname "tests/"
-  :components ((:file "btr-tests")))
+  :serial t
+  :components ((:file "btr-tests")
+               (:file "btr-api-tests")
+               (:file "btr-errors-tests")))
 
 (defsystem "cram-plans/tests/scripts"
   :depends-on ("cram-plans/tests/base")
@@ -452,7 +501,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "costmap-tests")
-               (:file "costmap-kitchen-tests")))
+               (:file "costmap-kitchen-tests")
+               (:file "costmap-api-tests")))
 
 (defsystem "cram-plans/tests/bad-input"
   :description "The table-driven bad-input suite of every layer a user touches."
@@ -484,7 +534,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
                "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"
-               "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"))
+               "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"
+               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -505,6 +556,12 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "yason" "sb-posix")
   :pathname "tests/"
   :components ((:file "viewer-tests")))
+
+(defsystem "cram-plans/tests/viewer-report"
+  :description "The viewer's /report endpoint, without a browser."
+  :depends-on ("cram-plans/tests/base" "cram-plans/viewer" "sb-bsd-sockets")
+  :pathname "tests/"
+  :components ((:file "viewer-report-tests")))
 
 (defsystem "cram-plans/tests/seeds"
   :description "Seed replays: tests/seeds/seed-NNN.lisp, each in a fresh SBCL."
@@ -630,7 +687,7 @@ containers, then clean it up."
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
-  :components ((:file "plans-tests") (:file "plans-placing-tests")))
+  :components ((:file "plans-tests") (:file "plans-placing-tests") (:file "scene-layout-tests")))
 
 ;;; Environment manipulation: drawers, doors and what is inside them.
 

@@ -93,20 +93,23 @@ be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies 
 ;;; ---- the costmap -----------------------------------------------------------------------------
 
 (defclass location-costmap ()
-  ((origin-x :initarg :origin-x :reader origin-x :type double-float
+  ((origin-x :initarg :origin-x :reader origin-x
              :documentation "Map x of the corner of cell (0 0).")
-   (origin-y :initarg :origin-y :reader origin-y :type double-float
+   (origin-y :initarg :origin-y :reader origin-y
              :documentation "Map y of the corner of cell (0 0).")
-   (resolution :initarg :resolution :reader resolution :type double-float
+   (resolution :initarg :resolution :reader resolution
                :documentation "Cell size in metres.")
    (width :initarg :width :reader width :documentation "Extent along x in metres.")
    (height :initarg :height :reader height :documentation "Extent along y in metres.")
    (columns :reader costmap-columns) (rows :reader costmap-rows)
-   (cost-functions :initform '() :accessor cost-functions
+   (cost-functions :initform '() :initarg :cost-functions :accessor cost-functions
                    :documentation "Entries (name function score), applied by ascending score.")
-   (orientation-generators :initform '() :accessor orientation-generators)
-   (height-generators :initform '() :accessor height-generators)
+   (orientation-generators :initform '() :initarg :orientation-generators
+                           :accessor orientation-generators)
+   (height-generators :initform '() :initarg :height-generators :accessor height-generators)
    (matrix :initform nil :accessor %matrix)
+   (normalized :initform nil :accessor %normalized
+               :documentation "NIL, or (total . normalised copy of the grid) for GET-COST-MAP.")
    (region :initform nil :accessor %region
            :documentation "(row-0 row-1 col-0 col-1) outside which the grid is 0.")
    (distribution :initform nil :accessor %distribution)
@@ -121,33 +124,62 @@ cost functions; samples are poses drawn with probability proportional to the cel
 
 (defun make-location-costmap (&key width height resolution origin-x origin-y)
   "A new, empty location costmap.  Every key left out comes from the metadata predicates
-COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
-  (let* ((size (unless (and width height) (costmap-metadata-value 'costmap-size :arity 2)))
-         (origin (unless (and origin-x origin-y) (costmap-metadata-value 'costmap-origin :arity 2)))
-         (width (or width (first size)))
-         (height (or height (second size)))
-         (resolution (or resolution (costmap-metadata-value 'costmap-resolution)))
-         (origin-x (or origin-x (first origin)))
-         (origin-y (or origin-y (second origin))))
-    (loop for (what value) in `(("width" ,width) ("height" ,height) ("resolution" ,resolution))
-          unless (and (finite-real-p value) (> value 0) (< value 1d4))
-            do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a positive real (metres)."
-                      what value))
-    (loop for (what value) in `(("origin x" ,origin-x) ("origin y" ,origin-y))
-          unless (and (finite-real-p value) (< (abs value) 1d6))
-            do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a finite real." what value))
-    (when (> (/ (* width height) (* resolution resolution)) 2.5d7)
-      (error "MAKE-LOCATION-COSTMAP: ~s x ~s m at ~s m resolution is more than 25 million ~
-              cells; use a coarser resolution." width height resolution))
-    (make-instance 'location-costmap
-                   :width width :height height
-                   :resolution (to-double resolution)
-                   :origin-x (to-double origin-x)
-                   :origin-y (to-double origin-y)
-                   :random-state (sb-ext:seed-random-state
-                                  (random (expt 2 62) *costmap-random-state*)))))
+COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE-INSTANCE
+'LOCATION-COSTMAP ...) with CRAM's initargs :WIDTH :HEIGHT :RESOLUTION :ORIGIN-X :ORIGIN-Y
+:COST-FUNCTIONS :HEIGHT-GENERATORS :ORIENTATION-GENERATORS makes the same costmap.)"
+  (make-instance 'location-costmap :width width :height height :resolution resolution
+                                   :origin-x origin-x :origin-y origin-y))
+
+(defun check-generator-list (list what)
+  (unless (and (listp list)
+               (every (lambda (g) (or (functionp g) (and (symbolp g) g (fboundp g)))) list))
+    (error "LOCATION-COSTMAP: the ~a ~s are not a list of functions." what list)))
 
 (defmethod initialize-instance :after ((c location-costmap) &key)
+  (flet ((given (slot) (and (slot-boundp c slot) (slot-value c slot))))
+    (let* ((size (unless (and (given 'width) (given 'height))
+                   (costmap-metadata-value 'costmap-size :arity 2)))
+           (origin (unless (and (given 'origin-x) (given 'origin-y))
+                     (costmap-metadata-value 'costmap-origin :arity 2)))
+           (width (or (given 'width) (first size)))
+           (height (or (given 'height) (second size)))
+           (resolution (or (given 'resolution) (costmap-metadata-value 'costmap-resolution)))
+           (origin-x (or (given 'origin-x) (first origin)))
+           (origin-y (or (given 'origin-y) (second origin))))
+      (loop for (what value) in `(("width" ,width) ("height" ,height) ("resolution" ,resolution))
+            unless (and (finite-real-p value) (> value 0) (< value 1d4))
+              do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a positive real (metres)."
+                        what value))
+      (loop for (what value) in `(("origin x" ,origin-x) ("origin y" ,origin-y))
+            unless (and (finite-real-p value) (< (abs value) 1d6))
+              do (error "MAKE-LOCATION-COSTMAP: the ~a is ~s, expected a finite real." what value))
+      (when (> (/ (* width height) (* resolution resolution)) 2.5d7)
+        (error "MAKE-LOCATION-COSTMAP: ~s x ~s m at ~s m resolution is more than 25 million ~
+                cells; use a coarser resolution." width height resolution))
+      (setf (slot-value c 'width) width
+            (slot-value c 'height) height
+            (slot-value c 'resolution) (to-double resolution)
+            (slot-value c 'origin-x) (to-double origin-x)
+            (slot-value c 'origin-y) (to-double origin-y))))
+  (let ((entries (cost-functions c)))
+    (unless (and (listp entries)
+                 (every (lambda (e) (and (consp e) (consp (cdr e))
+                                         (or (functionp (second e))
+                                             (and (symbolp (second e)) (second e)
+                                                  (fboundp (second e))))))
+                        entries))
+      (error "LOCATION-COSTMAP: the cost functions ~s are not a list of entries (name function ~
+              [score]) as COST-FUNCTIONS of another costmap gives." entries))
+    (setf (cost-functions c) '())
+    (loop for (name function . score) in entries
+          do (if score
+                 (register-cost-function c function name (first score))
+                 (register-cost-function c function name))))
+  (check-generator-list (orientation-generators c) "orientation generators")
+  (check-generator-list (height-generators c) "height generators")
+  (unless (slot-boundp c 'random-state)
+    (setf (slot-value c 'random-state)
+          (sb-ext:seed-random-state (random (expt 2 62) *costmap-random-state*))))
   (setf (slot-value c 'columns) (max 1 (round (to-double (width c)) (resolution c)))
         (slot-value c 'rows) (max 1 (round (to-double (height c)) (resolution c)))))
 
@@ -160,7 +192,8 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot."
   (+ (origin-y costmap) (* (+ row 0.5d0) (resolution costmap))))
 
 (defun invalidate-costmap (costmap)
-  (setf (%matrix costmap) nil (%distribution costmap) nil (%region costmap) nil)
+  (setf (%matrix costmap) nil (%distribution costmap) nil (%region costmap) nil
+        (%normalized costmap) nil)
   costmap)
 
 (defgeneric costmap-generator-name->score (name)
@@ -218,6 +251,7 @@ height generators of all of them."
                                       :width (width first) :height (height first)
                                       :resolution (resolution first)
                                       :origin-x (origin-x first) :origin-y (origin-y first)
+                                      :cost-functions '()
                                       :random-state (make-random-state
                                                      (costmap-random-state first)))))
           (dolist (c costmaps merged)
@@ -280,9 +314,10 @@ FUNCTION (x y) at their centres."
                               (check-cell-value costmap name v x y))
                             (setf (aref matrix r c) (* (aref matrix r c) v))))))))
 
-(defun get-cost-map (costmap)
-  "The value grid of COSTMAP: a (rows x columns) double-float array, row = y index, column = x
-index; computed once and cached until another function is registered."
+(defun cost-grid (costmap)
+  "The value grid of COSTMAP, not normalised: a (rows x columns) double-float array, row = y
+index, column = x index, each cell the product of the cost functions at its centre; computed
+once and cached until another function is registered."
   (or (%matrix costmap)
       (let* ((rows (costmap-rows costmap)) (cols (costmap-columns costmap))
              (m (make-array (list rows cols) :element-type 'double-float :initial-element 0d0)))
@@ -298,21 +333,6 @@ index; computed once and cached until another function is registered."
                          (multiply-by-function costmap m name fn r0 r1 c0 c1)))))
         (setf (%matrix costmap) m))))
 
-(defun get-map-value (costmap x y)
-  "The value of COSTMAP's cell containing the map point (X Y); 0 outside the grid."
-  (unless (typep costmap 'location-costmap)
-    (error "GET-MAP-VALUE: ~s is not a location costmap (see MAKE-LOCATION-COSTMAP)." costmap))
-  (loop for (what value) in `(("x" ,x) ("y" ,y))
-        unless (finite-real-p value)
-          do (error "GET-MAP-VALUE: the ~a coordinate is ~s, expected a finite real (metres)."
-                    what value))
-  (let* ((m (get-cost-map costmap))
-         (c (floor (- x (origin-x costmap)) (resolution costmap)))
-         (r (floor (- y (origin-y costmap)) (resolution costmap))))
-    (if (and (< -1 r (costmap-rows costmap)) (< -1 c (costmap-columns costmap)))
-        (aref m r c)
-        0d0)))
-
 ;;; ---- sampling -------------------------------------------------------------------------------------
 
 (defstruct (distribution (:conc-name dist-))
@@ -322,7 +342,7 @@ index; computed once and cached until another function is registered."
 
 (defun costmap-distribution (costmap)
   (or (%distribution costmap)
-      (let* ((m (get-cost-map costmap))
+      (let* ((m (cost-grid costmap))
              (cols (costmap-columns costmap))
              (region (%region costmap))
              (count (destructuring-bind (r0 r1 c0 c1) region

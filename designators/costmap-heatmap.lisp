@@ -19,7 +19,7 @@ grey.  With CROP, only the part where the value is not 0 is drawn, with a margin
     (error "COSTMAP-HEAT-MAP-IMAGE: scale ~s, expected an integer from 1 to 16." scale))
   (when (and occupancy-grid (not (typep occupancy-grid 'occupancy-grid)))
     (error "COSTMAP-HEAT-MAP-IMAGE: occupancy grid ~s, expected an OCCUPANCY-GRID." occupancy-grid))
-  (let* ((m (get-cost-map costmap))
+  (let* ((m (cost-grid costmap))
          (rows (costmap-rows costmap)) (cols (costmap-columns costmap))
          (maximum (loop for i below (array-total-size m) maximize (row-major-aref m i)))
          (r0 0) (r1 (1- rows)) (c0 0) (c1 (1- cols)))

@@ -14,6 +14,8 @@
    #:robot-costmap-metadata #:current-robot-costmap-metadata #:user-costmap-metadata
    ;; costmaps
    #:location-costmap #:make-location-costmap #:get-cost-map #:get-map-value
+   #:no-cost-functions-registered #:gen-costmap-sample-point #:cost-functions
+   #:height-generators #:orientation-generators
    #:costmap-samples #:register-cost-function #:register-height-generator
    #:register-orientation-generator #:costmap-generator-name->score
    #:desig-costmap #:merge-costmaps

@@ -25,6 +25,15 @@ MOTION-GROUNDING predicate to a command list (command argument...)."))
 (defclass human-designator (object-designator) ()
   (:documentation "Describes a human; referenced like an object designator."))
 
+(macrolet ((entry-list-descriptions (&rest classes)
+             `(progn
+                ,@(loop for class in classes
+                        collect `(defmethod normalize-designator-description
+                                     ((designator ,class) description)
+                                   (normalize-description description))))))
+  ;; these designators are described by (KEY VALUE...) entries only
+  (entry-list-descriptions action-designator motion-designator object-designator))
+
 (register-designator-class :action 'action-designator)
 (register-designator-class :motion 'motion-designator)
 (register-designator-class :object 'object-designator)

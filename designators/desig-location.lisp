@@ -8,6 +8,9 @@
 location generators and must pass the registered validators; REFERENCE returns the first
 valid one and NEXT-SOLUTION walks the others."))
 
+(defmethod normalize-designator-description ((designator location-designator) description)
+  (normalize-description description))
+
 (register-designator-class :location 'location-designator)
 
 (defvar *location-generator-max-retries* 30

@@ -13,6 +13,7 @@
    #:designator #:designator-p #:action-designator #:motion-designator
    #:location-designator #:object-designator #:human-designator
    #:register-designator-class #:find-designator-class #:designator-type
+   #:normalize-designator-description
    #:make-designator #:a #:an #:all
    ;; description access
    #:description #:properties #:quantifier #:desig-prop-value #:desig-prop-values
@@ -21,6 +22,7 @@
    ;; equation chains
    #:equate #:desig-equal #:first-desig #:current-desig #:newest-effective-designator
    #:get-equal-designators #:parent #:successor #:effective #:timestamp #:designator-data
+   #:data
    ;; grounding
    #:reference #:resolve-designator #:next-solution #:reset #:designator-solutions
    #:*default-role* #:designator-error #:designator-error-designator

@@ -53,15 +53,25 @@ the validators (or the retry cap ended the search)."))
 (defvar *designator-classes* '()
   "Alist (type-keyword . class-name) of the registered designator classes.")
 
-(defun register-designator-class (type class-name)
-  "Register CLASS-NAME (a subclass of DESIGNATOR) as the class of designators of TYPE, a
-keyword such as :ACTION. A later registration of the same TYPE replaces the earlier one."
-  (check-type type keyword)
-  (check-type class-name symbol)
-  (setf *designator-classes*
-        (append (remove type *designator-classes* :key #'car)
-                (list (cons type class-name))))
-  type)
+(defun %register-designator-class (type class-name)
+  "REGISTER-DESIGNATOR-CLASS of the symbols TYPE and CLASS-NAME."
+  (unless (and type (symbolp type))
+    (error "REGISTER-DESIGNATOR-CLASS: the designator type ~s is not a symbol." type))
+  (unless (and class-name (symbolp class-name))
+    (error "REGISTER-DESIGNATOR-CLASS: the class name ~s is not a symbol." class-name))
+  (let ((type (intern (symbol-name type) :keyword)))
+    (setf *designator-classes*
+          (append (remove type *designator-classes* :key #'car)
+                  (list (cons type class-name))))
+    type))
+
+(defmacro register-designator-class (type class-name)
+  "Register CLASS-NAME (a subclass of DESIGNATOR) as the class of the designators of TYPE (e.g.
+:ACTION, or a symbol of any package, taken by its name), so that MAKE-DESIGNATOR makes them. As
+in CRAM the arguments are not evaluated (a quoted symbol is accepted too). A later registration
+of the same TYPE replaces the earlier one. Returns the type keyword."
+  (flet ((literal (x) (if (and (consp x) (eq (car x) 'quote)) (second x) x)))
+    `(%register-designator-class ',(literal type) ',(literal class-name))))
 
 (defun find-designator-class (type &optional (errorp t))
   "The class name registered for TYPE (a symbol in any package, compared by name). With
@@ -99,6 +109,13 @@ ERRORP, an unknown type signals an error listing the known types; otherwise NIL.
 keyword keys, of something the robot acts on. Designators describing the same entity are
 linked into an equation chain (PARENT / SUCCESSOR); REFERENCE grounds a designator and caches
 the result in its data."))
+
+(defun data (designator)
+  "The data of DESIGNATOR (CRAM's name for DESIGNATOR-DATA): the reference cached in it by
+REFERENCE, or the object data perception gave it; NIL before it is grounded."
+  (unless (typep designator 'designator)
+    (error "DESIG:DATA: ~s is not a designator." designator))
+  (designator-data designator))
 
 (setf (documentation 'description 'function)
       "The ordered list of (KEY VALUE...) entries of a designator; keys are keywords."
@@ -156,14 +173,28 @@ entry (KEY . VALUE) with an atomic VALUE becomes (KEY VALUE)."
                       (t (error "Designator property ~s: expected a (KEY VALUE...) list."
                                 entry)))))
 
+(defgeneric normalize-designator-description (designator description)
+  (:documentation "DESCRIPTION checked and normalised for the new DESIGNATOR. By default a list
+is normalised to (KEYWORD VALUE...) entries and anything else (a string, a pose ...) is kept as
+it is, for designator classes of one's own; the action, motion, location, object and human
+designators need entry lists.")
+  (:method ((designator designator) description)
+    (if (listp description) (normalize-description description) description)))
+
 (defun %make-designator (type description &key (quantifier :a) parent)
   (unless (member quantifier '(:a :an :all))
     (error "Designator quantifier ~s: expected :A, :AN or :ALL." quantifier))
   (let* ((class (find-designator-class type))
-         (designator (make-instance class :description (normalize-description description)
-                                          :quantifier quantifier)))
+         (designator (make-instance class :quantifier quantifier)))
+    (setf (slot-value designator 'description)
+          (normalize-designator-description designator description))
     (when parent (equate parent designator))
     designator))
+
+(defun description-entries (designator)
+  "The (KEY VALUE...) entries of DESIGNATOR's description; none when it is not a list."
+  (let ((description (description designator)))
+    (if (listp description) description '())))
 
 (defun make-designator (type description &optional parent)
   "Make a designator of TYPE (:action, :motion, :location, :object, :human or another
@@ -186,13 +217,14 @@ NIL when there is none. The second value is true when such an entry exists."
 
 (defun find-entry (designator key)
   (let ((name (if (symbolp key) (symbol-name key) (error "Property key ~s: expected a symbol." key))))
-    (find name (description designator) :key (lambda (e) (symbol-name (car e))) :test #'string=)))
+    (find name (description-entries designator) :key (lambda (e) (symbol-name (car e)))
+                                                 :test #'string=)))
 
 (defun desig-prop-values (designator key)
   "The values of all entries of DESIGNATOR with KEY, in order (one per entry)."
   (check-designator designator 'desig-prop-values)
   (let ((name (symbol-name key)))
-    (loop for entry in (description designator)
+    (loop for entry in (description-entries designator)
           when (string= name (symbol-name (car entry))) collect (second entry))))
 
 (defun merge-descriptions (old new)
@@ -325,9 +357,11 @@ inside a list value keep their colons: (TYPE BOTTLE), (ARM (:LEFT :RIGHT)), (POS
                 (handler-case (symbol-name (designator-type designator))
                   (error () (symbol-name (class-name (class-of designator))))))
         (let ((*print-depth* (1+ *print-depth*)))
-          (dolist (entry (description designator))
-            (terpri stream)
-            (loop repeat indent do (write-char #\Space stream))
-            (write-property-value entry stream)))
+          (if (listp (description designator))
+              (dolist (entry (description designator))
+                (terpri stream)
+                (loop repeat indent do (write-char #\Space stream))
+                (write-property-value entry stream))
+              (format stream " ~s" (description designator))))
         (write-char #\> stream)))
   designator)

@@ -7,6 +7,10 @@
   (:export
    ;; the current robot
    #:*robot-name* #:*robot-urdf* #:current-robot-name #:set-robot-name
+   #:*robot-description-parameter* #:*environment-urdf* #:*environment-name-function*
+   #:get-environment-name #:get-robot-name
+   #:visibility-designator #:reachability-designator
+   #:visibility-designator-p #:reachability-designator-p
    #:urdf-name->robot-name #:described-robot-names
    #:robot-interface-error
    ;; Lisp helpers over the facts

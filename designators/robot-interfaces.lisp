@@ -10,6 +10,30 @@ SET-ROBOT-NAME; read it with CURRENT-ROBOT-NAME.")
 (defvar *robot-urdf* nil
   "The parsed URDF model of the current robot, or NIL before the belief state reads it.")
 
+(defparameter *robot-description-parameter* "robot_description"
+  "The ROS parameter holding the robot's URDF, read when a ROS node runs.")
+
+(defvar *environment-urdf* nil
+  "The parsed URDF model of the environment (the kitchen, the shop), or NIL before the belief
+state reads it.")
+
+(defvar *environment-name-function* nil
+  "A function of no arguments returning the name of the environment object of the current
+belief state, or NIL; the belief state sets it.")
+
+(defun get-environment-name ()
+  "The name of the environment the robot acts in: the environment object of the current belief
+state, else the keyword of *ENVIRONMENT-URDF*'s robot name (\"iai_kitchen\" gives
+:IAI-KITCHEN), as *ENVIRONMENT-NAME-FUNCTION* finds them. Signals ROBOT-INTERFACE-ERROR when
+there is none."
+  (or (and *environment-name-function* (funcall *environment-name-function*))
+      (robot-interface-error "No environment: the belief state has no environment object and ~
+                              ~s is NIL." '*environment-urdf*)))
+
+(defun get-robot-name ()
+  "The name of the current robot (CRAM's name for CURRENT-ROBOT-NAME)."
+  (current-robot-name))
+
 (define-condition robot-interface-error (simple-error) ()
   (:documentation "Bad input to, or a missing fact behind, a robot-interface helper."))
 

@@ -42,17 +42,23 @@ returns the last cons found, or NIL."
         (t pattern)))
 
 (defun var-value (var bindings)
-  "The value of VAR in BINDINGS with all bound variables inside it substituted; VAR itself (or
-the last variable of its chain) when unbound."
+  "The value of the variable VAR in BINDINGS with all bound variables inside it substituted;
+VAR itself (or the last variable of its chain) when unbound. Anything that is not a variable (a
+list, a number ...) is returned as it is, as in CRAM: use SUBSTITUTE-VARS for patterns."
   (unless (and (listp bindings) (every #'consp bindings))
     (error "VAR-VALUE of ~s: expected a binding alist ((?var . value) ...), got ~s."
            var (if (listp bindings) (find-if-not #'consp bindings) bindings)))
-  (substitute-vars var bindings))
+  (if (is-var var)
+      (substitute-vars var bindings)
+      var))
 
 (defun is-bound (var bindings)
-  "True when VAR has a non-variable value in BINDINGS."
-  (let ((cell (binding-of var bindings)))
-    (and cell (not (is-var (cdr cell))))))
+  "True unless VAR is a variable without a non-variable value in BINDINGS (anything that is not
+a variable, a list holding variables included, counts as bound, as in CRAM)."
+  (if (is-var var)
+      (let ((cell (binding-of var bindings)))
+        (and cell (not (is-var (cdr cell))) t))
+      t))
 
 (defun is-ground (pattern &optional bindings)
   "True when PATTERN, after substitution with BINDINGS, holds no variable."
@@ -89,7 +95,10 @@ the last variable of its chain) when unbound."
 
 (defun unify (a b &optional bindings)
   "Unify the patterns A and B under BINDINGS. Returns (values new-bindings t) on success and
-(values nil nil) on failure. Atoms unify when EQUAL; ?_ unifies with anything; no occurs check."
+(values nil nil) on failure. Atoms unify when EQUAL; ?_ unifies with anything; no occurs check.
+A segment variable !?x in the car of a cons of either side takes the shortest run of elements of
+the other side (a proper list) that lets the rest unify, and binds ?x to it; a segment variable
+anywhere else is an error."
   (labels ((deref (x bdgs)
              (loop while (is-var x)
                    do (let ((cell (assoc x bdgs)))
@@ -97,16 +106,25 @@ the last variable of its chain) when unbound."
              x)
            (u (a b bdgs)
              (let ((a (deref a bdgs)) (b (deref b bdgs)))
-               (cond ((or (is-anonymous-var a) (is-anonymous-var b)) (values bdgs t))
+               (cond ((or (is-segvar a) (is-segvar b))
+                      (error "UNIFY: the segment variable ~s is not the car of a cons (unifying ~
+                              ~s with ~s)." (if (is-segvar a) a b) a b))
+                     ((or (is-anonymous-var a) (is-anonymous-var b)) (values bdgs t))
                      ((and (is-var a) (eq a b)) (values bdgs t))
                      ((is-var a) (values (acons a b bdgs) t))
                      ((is-var b) (values (acons b a bdgs) t))
+                     ((is-segform a) (match-segvar a b bdgs #'u))
+                     ((is-segform b) (match-segvar b a bdgs #'u))
                      ((and (consp a) (consp b))
                       (multiple-value-bind (b1 ok) (u (car a) (car b) bdgs)
                         (if ok (u (cdr a) (cdr b) b1) (values nil nil))))
                      ((equal a b) (values bdgs t))
                      (t (values nil nil))))))
     (u a b bindings)))
+
+(defun unify-p (a b &optional bindings)
+  "True when the patterns A and B unify under BINDINGS (see UNIFY)."
+  (nth-value 1 (unify a b bindings)))
 
 (defun add-bdg (var value bindings)
   "Add the binding of VAR to VALUE to BINDINGS, unifying with an existing value of VAR.

@@ -42,15 +42,15 @@ defines without either group declaring the functor extendable."))
 predicate, which cannot be redefined or extended; choose another name." name f)))
           (when pred
             (dolist (source (pred-sources pred))
-              (let ((other (gethash (car source) *fact-groups*)))
+              (progn
                 (unless (or (eq (car source) name)
                             (member f extendable)
-                            (member f (group-extendable other)))
+                            (and old (member f (group-functors old))))
                   (error 'fact-group-error
                          :functor f :group name :other-group (car source)
                          :message (format nil "Fact group ~s gives clauses to ~s, which fact group ~s ~
-already defines; neither group lists ~s among its extendable functors."
-                                          name f (car source) f))))))))
+already defines, but does not list ~s among its extendable functors: write (def-fact-group ~s (~s ...) ...)."
+                                          name f (car source) f name f))))))))
       (when old
         (dolist (f (group-functors old))
           (let ((pred (ensure-pred f)))
@@ -73,10 +73,10 @@ already defines; neither group lists ~s among its extendable functors."
 
 (defmacro def-fact-group (name (&rest extendable-functors) &body clauses)
   "Define the fact group NAME from clauses (<- head goal...). A functor that another group
-already defines may get clauses here only if this group or that one lists it among
-EXTENDABLE-FUNCTORS; otherwise a FACT-GROUP-ERROR names both groups and the functor. Redefining
-a group replaces its clauses and keeps its place: clauses are ordered by group registration,
-then textually."
+already defines may get clauses here only if this group lists it among EXTENDABLE-FUNCTORS, as
+in CRAM; otherwise a FACT-GROUP-ERROR names both groups and the functor. Redefining a group
+replaces its clauses and keeps its place (and its right to the functors it defined): clauses
+are ordered by group registration, then textually."
   (let ((forms (mapcar (lambda (c)
                          (unless (and (consp c) (symbolp (car c)) (string= (symbol-name (car c)) "<-"))
                            (error 'fact-group-error

@@ -19,12 +19,63 @@
   (multiple-value-bind (element present-p) (funcall (lazy-tail-generator tail))
     (if present-p (cons element tail) nil)))
 
+(defvar *lazy-list-dynamic-environment* nil
+  "NIL, or a function of one argument (a thunk) that calls the thunk inside the dynamic
+bindings of a WITH-LAZY-LIST-DYNAMIC-ENVIRONMENT form. A lazy list made while it is set computes
+every element inside those bindings.")
+
 (defun make-lazy-list (generator)
   "Return a lazy list whose elements are produced by calling GENERATOR, a function of no
 arguments returning (values element present-p); PRESENT-P NIL ends the list. The first element
-is computed at once (an empty generator gives NIL)."
+is computed at once (an empty generator gives NIL). Inside WITH-LAZY-LIST-DYNAMIC-ENVIRONMENT
+every element is computed with that form's special bindings."
   (check-type generator function)
-  (expand-tail (%make-lazy-tail generator)))
+  (let ((environment *lazy-list-dynamic-environment*))
+    (expand-tail (%make-lazy-tail
+                  (if environment
+                      (lambda () (funcall (the function environment) generator))
+                      generator)))))
+
+(defmacro with-lazy-list-dynamic-environment ((&rest bindings) &body body)
+  "Evaluate BODY so that every lazy list it creates computes its elements, whenever they are
+read, with the special variables of BINDINGS ((variable value-form) ...) bound to the values
+the VALUE-FORMs have now."
+  (let ((names (mapcar (lambda (b) (if (consp b) (first b) b)) bindings))
+        (values (gensym "VALUES")) (outer (gensym "OUTER")) (thunk (gensym "THUNK")))
+    (dolist (name names)
+      (unless (and (symbolp name) name (not (constantp name)))
+        (error "WITH-LAZY-LIST-DYNAMIC-ENVIRONMENT: ~s is not a variable name." name)))
+    `(let ((,values (list ,@(mapcar (lambda (b) (if (consp b) (second b) nil)) bindings)))
+           (,outer *lazy-list-dynamic-environment*))
+       (let ((*lazy-list-dynamic-environment*
+               (lambda (,thunk)
+                 (flet ((inside () (progv ',names ,values (funcall ,thunk))))
+                   (if ,outer (funcall ,outer #'inside) (inside))))))
+         ,@body))))
+
+;;; Delayed values
+
+(defstruct (delay (:constructor %make-delay (generator)) (:copier nil) (:predicate delay-p))
+  "A value computed on first FORCE and remembered."
+  (generator nil :type (or null function))
+  (value nil))
+
+(setf (documentation 'delay-p 'function) "True when OBJECT is a delayed value made by DELAY.")
+
+(defmacro delay (&body body)
+  "A delayed value: BODY is evaluated the first time the value is FORCEd, and only then."
+  `(%make-delay (lambda () ,@body)))
+
+(defun force (object)
+  "The value of the delayed value OBJECT, computing it on the first call; any other object is
+its own value."
+  (if (delay-p object)
+      (let ((generator (delay-generator object)))
+        (when generator
+          (setf (delay-value object) (funcall generator)
+                (delay-generator object) nil))
+        (delay-value object))
+      object))
 
 (defmacro lazy-list ((&rest bindings) &body body)
   "Build a lazy list from a generator loop. BINDINGS are (var init) pairs holding the loop state.
@@ -32,7 +83,8 @@ BODY is evaluated for each step and must end the step with one of the local form
   (CONT value new-values...) yield VALUE, then continue with the state set to NEW-VALUES;
   (NEXT new-values...)       yield nothing, continue with the new state;
   (FINISH [value])           end the list, yielding VALUE first when given.
-New values are assigned to the BINDINGS variables in order; missing ones keep their value."
+New values are assigned to the BINDINGS variables in order; missing ones keep their value.
+A step whose BODY returns without one of them ends the list (as (FINISH))."
   (let ((vars (mapcar (lambda (b) (if (consp b) (first b) b)) bindings))
         (step (gensym "STEP")) (done (gensym "DONE")) (result (gensym "RESULT")))
     `(let (,@(mapcar (lambda (b) (if (consp b) (list (first b) (second b)) (list b nil))) bindings)
@@ -59,7 +111,8 @@ New values are assigned to the BINDINGS variables in order; missing ones keep th
                                          (return-from ,',result
                                            ,(if value-p `(values ,value t) '(values nil nil))))))
                       ,@body
-                      (error "LAZY-LIST body ended without CONT, NEXT or FINISH")))))))))))
+                      (setf ,done t)
+                      (return-from ,result (values nil nil))))))))))))
 
 (declaim (inline lazy-list-p))
 (defun lazy-list-p (object)
@@ -69,9 +122,10 @@ New values are assigned to the BINDINGS variables in order; missing ones keep th
 (defun not-a-list-error (function object)
   (error 'lazy-list-type-error :function function :datum object))
 
-(define-condition lazy-list-type-error (error)
+(define-condition lazy-list-type-error (simple-error)
   ((function :initarg :function :reader lazy-list-type-error-function)
    (datum :initarg :datum :reader lazy-list-type-error-datum))
+  (:default-initargs :format-control "Expected a list or a lazy list." :format-arguments '())
   (:report (lambda (c s)
              (let ((*print-length* 10) (*print-level* 4))
                (format s "~s: expected a list or a lazy list, got ~s."
@@ -124,9 +178,11 @@ infinite lazy list."
            (values nil nil)
            (values (apply function (mapcar #'car ls)) t))))))
 
-(defun lazy-mapcan (function list)
-  "Lazily append the (lazy) lists that FUNCTION returns for each element of LIST."
-  (let ((outer list) (inner nil) (started nil))
+(defun lazy-mapcan (function list &rest more-lists)
+  "Lazily append the (lazy) lists that FUNCTION returns for the elements of LIST and
+MORE-LISTS taken in parallel (ending with the shortest). A result that is not a list signals
+LAZY-LIST-TYPE-ERROR (a SIMPLE-ERROR, as in CRAM) when the list reaches it."
+  (let ((outers (cons list more-lists)) (inner nil) (started nil))
     (make-lazy-list
      (lambda ()
        (loop
@@ -134,11 +190,14 @@ infinite lazy list."
                 (let ((element (car inner)))
                   (setf inner (lazy-cdr inner))
                   (return (values element t))))
-               ((and started (null outer)) (return (values nil nil)))
+               ((and started (some #'null outers)) (return (values nil nil)))
                (t
-                (if started (setf outer (lazy-cdr outer)) (setf started t))
-                (when (null outer) (return (values nil nil)))
-                (setf inner (funcall function (car outer))))))))))
+                (if started (setf outers (mapcar #'lazy-cdr outers)) (setf started t))
+                (when (some #'null outers) (return (values nil nil)))
+                (let ((result (apply function (mapcar #'car outers))))
+                  (unless (listp result)
+                    (not-a-list-error 'lazy-mapcan result))
+                  (setf inner result)))))))))
 
 (defun lazy-filter (predicate list)
   "The lazy list of the elements of LIST for which PREDICATE is true."
@@ -183,3 +242,23 @@ the first element starts the accumulator."
       (setf acc (car l) l (lazy-cdr l)))
     (lazy-dolist (element l acc)
       (setf acc (funcall function acc element)))))
+
+(defun lazy-skip (n list)
+  "The lazy LIST without its first N elements (NIL when it is shorter)."
+  (check-type n (integer 0))
+  (loop repeat n while list do (setf list (lazy-cdr list)))
+  list)
+
+(defun lazy-flatten (list)
+  "A lazy list of the atoms of the (lazy) tree LIST, depth first."
+  (lazy-mapcan (lambda (element)
+                 (if (listp element) (lazy-flatten element) (list element)))
+               list))
+
+(defun lazy-rests (list)
+  "The lazy list of LIST and each of its successive lazy tails."
+  (let ((l list) (started nil))
+    (make-lazy-list
+     (lambda ()
+       (if started (setf l (lazy-cdr l)) (setf started t))
+       (if l (values l t) (values nil nil))))))

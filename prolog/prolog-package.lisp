@@ -23,9 +23,9 @@ Decisions on CRAM's quirks:
   NOT, ONCE, CALL, FINDALL, BAGOF, SETOF, FORALL, EVERY and the condition of -> are opaque.
 - FINDALL returns an ordinary list; SETOF removes EQUAL duplicates and keeps the order of
   discovery (it does not sort), as in CRAM.
-- A functor that one fact group defines may get clauses in another one when either of the two
-  lists it among its extendable functors; otherwise DEF-FACT-GROUP signals FACT-GROUP-ERROR.
-  A redefined group keeps its place in the clause order.
+- A functor that one fact group defines may get clauses in another one only when the other one
+  lists it among its extendable functors (CRAM's rule); otherwise DEF-FACT-GROUP signals
+  FACT-GROUP-ERROR. A redefined group keeps its place in the clause order.
 - A handler defined with DEF-PROLOG-HANDLER runs first; the functor's clauses are tried only when
   the handler returns no solution (CRAM's behaviour).
 - A goal whose functor has no definition warns once per functor and fails. A goal written with a
@@ -47,7 +47,13 @@ Decisions on CRAM's quirks:
    #:*break-on-lisp-errors* #:propagate-lisp-errors #:lisp-errors-propagate-p
    #:*prolog-heap-limit* #:prolog-error #:fact-group-error #:prolog-resource-error
    #:fact-group-names #:fact-group-clauses #:remove-fact-group #:predicate-clauses
-   #:database-generation
+   #:database-generation #:filter-bindings #:unify #:unify-p #:?_
+   ;; RETE: working memory and productions
+   #:clear-alpha-network #:rete-assert #:rete-retract #:with-facts-asserted #:object-id
+   #:rete-holds #:alpha-network-size #:rete-prove
+   #:def-production #:register-production #:clear-productions #:remove-production
+   #:with-productions #:register-production-handler #:remove-production-handler
+   #:with-production-handlers
    #:add-fact #:remove-facts #:predicate
    ;; native predicates
    #:def-native-predicate #:solve-continue #:unify-terms #:unify-each #:deref-term

@@ -124,3 +124,20 @@ only the first is computed before PROLOG returns."
                  (if found
                      (values (car found) t)
                      (values nil nil))))))))))
+
+(defun filter-bindings (form bindings &optional initial-bindings)
+  "INITIAL-BINDINGS extended by the values that BINDINGS (a superset of them, e.g. a solution of
+a query made under them) gives to the variables of FORM and of INITIAL-BINDINGS: the bindings
+of every other variable are left out. A variable of INITIAL-BINDINGS keeps its binding there,
+and a variable that INITIAL-BINDINGS binds to another one gets its value through that one."
+  (unless (and (listp bindings) (every #'consp bindings))
+    (prolog-error "FILTER-BINDINGS: expected a binding alist ((?var . value) ...), got ~s." bindings))
+  (unless (and (listp initial-bindings) (every #'consp initial-bindings))
+    (prolog-error "FILTER-BINDINGS: expected initial bindings as an alist ((?var . value) ...), got ~s."
+                  initial-bindings))
+  (let ((result initial-bindings))
+    (dolist (var (vars-in (cons form initial-bindings)) result)
+      (unless (assoc var result)
+        (let ((value (var-value var bindings)))
+          (unless (eq value var)
+            (push (cons var value) result)))))))

@@ -129,8 +129,11 @@
    :match ":BAD-INPUT-FILTER")
   (add-object-unknown-mesh :error (in-small-world (btr:add-object w :mesh 'b (pose0) :mesh :bad-input-mesh))
    :match ":BAD-INPUT-MESH")
-  (add-object-types-string :accepts
-   (in-small-world (btr:add-object w :box 'b (pose0) :types "bottle")
+  (add-object-types-string :error
+   (in-small-world (btr:add-object w :box 'b (pose0) :types "bottle"))
+   :match "\"bottle\"")
+  (add-object-types-strings-in-list :accepts
+   (in-small-world (btr:add-object w :box 'b (pose0) :types '("bottle"))
                    (assert (equal '(:bottle) (btr:item-types (btr:object w 'b))))))
   (add-object-types-number :error (in-small-world (btr:add-object w :box 'b (pose0) :types 42))
    :match "42")

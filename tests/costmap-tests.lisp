@@ -35,6 +35,7 @@
     (is (= 60 (costmap:costmap-columns c)))
     (is (= 40 (costmap:costmap-rows c)))
     (is (= -1d0 (costmap:origin-x c)))
+    (costmap:register-cost-function c (lambda (x y) (declare (ignore x y)) 1) 'flat)
     (is (equal '(40 60) (array-dimensions (costmap:get-cost-map c))))))
 
 (test grid-geometry-from-metadata
@@ -52,8 +53,12 @@
     (costmap:register-cost-function c g 'gauss)
     (costmap:register-cost-function c r 'range)
     (let ((m (costmap:get-cost-map c)))
-      ;; cell (row 12, column 13) has its centre at (0.35, 0.25)
-      (is (< (abs (- (aref m 12 13) (* (funcall g 0.35d0 0.25d0) (funcall r 0.35d0 0.25d0)))) 1d-12))
+      ;; cell (row 12, column 13) has its centre at (0.35, 0.25), cell (10 10) at (0.05 0.05);
+      ;; the grid is normalised, so compare the ratio of two cells
+      (is (< (abs (- (/ (aref m 12 13) (aref m 10 10))
+                     (/ (* (funcall g 0.35d0 0.25d0) (funcall r 0.35d0 0.25d0))
+                        (* (funcall g 0.05d0 0.05d0) (funcall r 0.05d0 0.05d0)))))
+             1d-9))
       (is (> (aref m 12 13) 0))
       ;; (0.85, 0.85) is out of range
       (is (= 0 (costmap:get-map-value c 0.85 0.85)))

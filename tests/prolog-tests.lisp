@@ -183,9 +183,10 @@
   (eval '(def-fact-group iface-impl (iface-pred) (<- (iface-pred :impl))))
   (is (equal '(:impl) (values-of '?x '(iface-pred ?x))))
   (eval '(def-fact-group iface-open (open-pred) (<- (open-pred 1))))
-  (eval '(def-fact-group iface-open-user () (<- (open-pred 2))))
-  (is (equal '(1 2) (values-of '?x '(open-pred ?x)))
-      "listed as extendable by the group that defines it"))
+  (signals fact-group-error (eval '(def-fact-group iface-open-user () (<- (open-pred 2))))
+    "listed as extendable only by the group that defines it: CRAM's error")
+  (eval '(def-fact-group iface-open-user (open-pred) (<- (open-pred 2))))
+  (is (equal '(1 2) (values-of '?x '(open-pred ?x)))))
 
 (test group-redefinition
   (eval '(def-fact-group redef-a () (<- (redef-pred 1))))

@@ -64,14 +64,30 @@ the interaction finds the product and points at it.")
   (if (> (length text) n) (subseq text (- (length text) n)) text))
 
 (defstruct readme-run
-  (env nil) (dir nil) (session nil) (session-log nil) (launch nil) (results '()))
+  (env nil) (dir nil) (work nil) (session nil) (session-log nil) (launch nil) (results '()))
+
+(defun make-scratch-checkout (dir)
+  "A directory in DIR holding a symbolic link to every entry of the checkout but out/, so that
+the blocks, run there, write what they make (out/run, out/runs.jsonl ...) into DIR instead of
+the checkout's out/, which belongs to the user; its namestring."
+  (let* ((checkout (asdf:system-source-directory "cram-plans"))
+         (work (uiop:ensure-directory-pathname (merge-pathnames "checkout/" dir))))
+    (ensure-directories-exist work)
+    (dolist (entry (append (uiop:directory-files checkout) (uiop:subdirectories checkout)))
+      (let ((name (if (uiop:directory-pathname-p entry)
+                      (car (last (pathname-directory entry)))
+                      (file-namestring entry))))
+        (unless (string= name "out")
+          (sb-posix:symlink (string-right-trim "/" (namestring entry))
+                            (concatenate 'string (namestring work) name)))))
+    (namestring work)))
 
 (defun readme-start (run name program args &key input)
-  "Start PROGRAM in the checkout, in its own process group, output to NAME.log in the run's
-directory; the process (and its log path)."
+  "Start PROGRAM in the run's scratch copy of the checkout (see MAKE-SCRATCH-CHECKOUT), output
+to NAME.log in the run's directory; the process (and its log path)."
   (let* ((log (format nil "~a~a.log" (readme-run-dir run) name))
          (p (sb-ext:run-program program args :search t :wait nil
-                                             :directory (namestring (asdf:system-source-directory "cram-plans"))
+                                             :directory (readme-run-work run)
                                              :environment (readme-run-env run)
                                              :input (if input :stream nil)
                                              :output log :if-output-exists :supersede :error :output)))
@@ -147,7 +163,7 @@ map server comes up."
       (values ok (tail (file-text log))))))
 
 (defun run-sh-block (run block)
-  "Run BLOCK with bash -e in the checkout; ok when it exits 0."
+  "Run BLOCK with bash -e in the scratch copy of the checkout; ok when it exits 0."
   (multiple-value-bind (p log)
       (readme-start run (format nil "sh-~d" (readme-block-index block)) "bash"
                     (list "-e" "-c" (readme-block-text block)))
@@ -173,6 +189,7 @@ map server comes up."
          (dir (format nil "/tmp/cram-readme-test-~d-~d/" (sb-posix:getpid) (get-universal-time)))
          (run (make-readme-run :dir dir)))
     (ensure-directories-exist dir)
+    (setf (readme-run-work run) (make-scratch-checkout dir))
     (is (>= (length blocks) 8) "README.md has ~d lisp/sh blocks" (length blocks))
     (unwind-protect
          (progn

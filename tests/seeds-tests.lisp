@@ -14,14 +14,20 @@
 
 (defun seed-directory () (asdf:system-relative-pathname "cram-plans/tests/base" "tests/seeds/"))
 
+(defvar *seed-log-directory*
+  (uiop:ensure-directory-pathname
+   (merge-pathnames (format nil "cram-plans-seeds-~d/" (sb-unix:unix-getpid))
+                    (uiop:temporary-directory)))
+  "Where the seed replays' logs go: a temporary folder of this test run (the checkout's out/
+belongs to the user).")
+
 (defun run-seed (number)
   "Replay seed NUMBER in a fresh SBCL. Returns its exit code, its `seed NNN: K/N blocks' line
-and its whole output; the output is also kept in out/seeds/seed-NUMBER.log."
+and its whole output; the output is also kept in *SEED-LOG-DIRECTORY*'s seed-NUMBER.log."
   (let* ((env (remove-if (lambda (kv) (or (uiop:string-prefix-p "CL_SOURCE_REGISTRY=" kv)
                                           (uiop:string-prefix-p "ROS_MASTER_URI=" kv)))
                          (sb-ext:posix-environ)))
-         (log (asdf:system-relative-pathname "cram-plans/tests/base"
-                                             (format nil "out/seeds/seed-~a.log" number)))
+         (log (merge-pathnames (format nil "seed-~a.log" number) *seed-log-directory*))
          (process (sb-ext:run-program "/usr/bin/env"
                                       (list "sbcl" "--noinform" "--non-interactive" "--no-userinit"
                                             "--no-sysinit"

@@ -309,7 +309,7 @@
                                          (lambda () (make-3d-vector
                                                      sb-ext:double-float-positive-infinity 0 0))))))
   (is (search "(1 2)" (error-message (lambda () (make-pose '(1 2) (make-identity-rotation))))))
-  (is (search "7" (error-message (lambda () (make-transform (make-identity-vector) 7)))))
+  (is (search "(7)" (error-message (lambda () (make-transform (make-identity-vector) (list 7))))))
   (is (search "zero" (error-message (lambda () (axis-angle->quaternion (make-3d-vector 0 0 0) 1)))))
   (is (search "rotation matrix"
               (error-message (lambda () (matrix->quaternion

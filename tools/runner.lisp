@@ -444,6 +444,10 @@ generation, runs, rss_mb, heap_mb) and the deaths (plists)."
          (samples (list '()))
          (deaths '()))
     (ensure-directories-exist tmp)
+    ;; the folder of the results file, made before the runs (out/ may not exist yet)
+    (handler-case (ensure-directories-exist results)
+      (file-error (e)
+        (error "batch: cannot make the folder of the results file ~s: ~a" results e)))
     (unwind-protect
          (progn
            (loop for slot in slots for j from 0

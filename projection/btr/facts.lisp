@@ -82,7 +82,7 @@ has no such object, or naming POSE when it is not a pose."
 ;;; STABLE ...) warn and fail on a Lisp error, failure being their documented answer.
 (prolog:propagate-lisp-errors 'prolog-add-object 'remove-object 'prolog-set-object-pose
                               'prolog-set-pose-on 'prolog-set-joint-state 'prolog-attach
-                              'prolog-detach 'simulate 'step)
+                              'prolog-detach 'simulate 'step-world)
 
 ;;; ---- worlds and objects ----------------------------------------------------------------------------
 
@@ -138,9 +138,9 @@ has no such object, or naming POSE when it is not a pose."
   (<- (simulate ?world ?seconds ?dt)
     (lisp-fun simulate ?world ?seconds ?dt ?_))
   (<- (step ?world)
-    (lisp-fun step ?world ?_))
+    (lisp-fun step-world ?world ?_))
   (<- (step ?world ?dt)
-    (lisp-fun step ?world ?dt ?_))
+    (lisp-fun step-world ?world ?dt ?_))
 
   ;; assert and retract: the world first, or inside the term
   (<- (assert ?world (object ?type ?name ?pose . ?keys))

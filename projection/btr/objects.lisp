@@ -23,11 +23,29 @@ larger one is refused with an error naming it (Bullet loses all precision far be
                                     (prin1-to-string x)))))
       (coerce x 'double-float)))
 
+(defun pose-in-fixed-frame (pose-stamped what)
+  "POSE-STAMPED in CRAM-TF:*FIXED-FRAME* (the frame of the world): as it is when it is given in
+that frame, else transformed there by CRAM-TF:*TRANSFORMER*; a frame the transformer does not
+connect to the fixed frame is an error naming it."
+  (let ((frame (cl-transforms-stamped:frame-id pose-stamped))
+        (fixed cram-tf:*fixed-frame*))
+    (flet ((same-frame-p (a b)
+             (string= (string-left-trim "/" a) (string-left-trim "/" b))))
+      (cond ((same-frame-p frame fixed) pose-stamped)
+            ((and (typep cram-tf:*transformer* 'cl-transforms-stamped:transformer)
+                  (cl-transforms-stamped:can-transform cram-tf:*transformer* fixed frame))
+             (cl-transforms-stamped:transform-pose-stamped
+              cram-tf:*transformer* :target-frame fixed :pose pose-stamped))
+            (t (btr-fail "~a ~s is given in the frame ~s, which is neither the world's frame ~s ~
+                          (CRAM-TF:*FIXED-FRAME*) nor connected to it in CRAM-TF:*TRANSFORMER*"
+                         what pose-stamped frame fixed))))))
+
 (defun ensure-pose (pose &optional (what "pose"))
   "POSE as a CL-TRANSFORMS:POSE. Accepts a pose (or pose-stamped), ((x y z) (qx qy qz qw)),
 or (x y z) (identity orientation)."
   (flet ((reals (l n) (and (listp l) (= (length l) n) (every #'realp l))))
-    (cond ((cl-transforms:pose-p pose) pose)
+    (cond ((cl-transforms-stamped:pose-stamped-p pose) (pose-in-fixed-frame pose what))
+          ((cl-transforms:pose-p pose) pose)
           ((and (consp pose) (= (length pose) 2) (reals (first pose) 3) (reals (second pose) 4))
            (handler-case
                (cl-transforms:make-pose (apply #'cl-transforms:make-3d-vector (first pose))
@@ -175,7 +193,9 @@ an error naming OBJECT instead of its handle."
 
 (defun object-color (object &optional link)
   "The RGBA colour of OBJECT (or of its LINK index) as a list."
-  (coerce (native:object-color (whandle object) (object-handle object) (or link -1)) 'list))
+  (coerce (with-live-object (object 'object-color)
+            (native:object-color (whandle object) (object-handle object) (or link -1)))
+          'list))
 
 ;;; ---- object kinds -----------------------------------------------------------------------------
 
@@ -203,23 +223,23 @@ group and mask, color, types) are rejected by ADD-OBJECT with an error naming th
 (defgeneric add-object (world type name pose &rest keys)
   (:documentation "Add an object of TYPE (:static-plane :box :colored-box :sphere :cylinder :cone
 :mesh :urdf :point-cloud ...) called NAME at POSE to WORLD and return it. KEYS is a list of
-keywords and values; unknown keys are an error. :TYPES is a list of item types (a single
-symbol or string is taken as a one-element list; strings become keywords)."))
+keywords and values; unknown keys are an error. :TYPES is a list of item types (symbols, or
+strings, which become keywords)."))
 
 (defmethod add-object (world type name pose &rest keys)
   (declare (ignore type name pose keys))
   (check-world world 'add-object))
 
 (defun normalize-item-types (types)
-  "The :TYPES argument of ADD-OBJECT as a list of symbols; strings become keywords."
+  "The :TYPES argument of ADD-OBJECT, a list, as a list of symbols; strings become keywords."
+  (unless (and (listp types) (alexandria:proper-list-p types))
+    (btr-fail "ADD-OBJECT: :types ~s, expected a list of item types, e.g. (:bottle)" types))
   (flet ((one (x)
            (cond ((and x (symbolp x)) x)
                  ((and (stringp x) (plusp (length x))) (intern (string-upcase x) :keyword))
                  (t (btr-fail "ADD-OBJECT: item type ~s in :types ~s, expected a symbol or string"
                               x types)))))
-    (if (and (listp types) (alexandria:proper-list-p types))
-        (mapcar #'one types)
-        (list (one types)))))
+    (mapcar #'one types)))
 
 (defmethod add-object ((world bt-reasoning-world) type name pose &rest keys)
   (check-world world 'add-object)
@@ -332,7 +352,30 @@ symbol or string is taken as a one-element list; strings become keywords)."))
                            (positive-arg height ":cone height") :mass (mass-arg mass ":cone"))
           'item '(:cone)))
 
+(defun spanning-points-p (points)
+  "True when the (x y z) POINTS do not all lie on one line (they span at least a plane)."
+  (let* ((vectors (mapcar (lambda (p) (mapcar (lambda (c) (coerce c 'double-float)) p)) points))
+         (p0 (first vectors))
+         (p1 (find-if (lambda (p) (> (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) p p0))
+                                     1d-18))
+                      vectors)))
+    (flet ((minus (a b) (mapcar #'- a b)))
+      (and p1
+           (let ((d1 (minus p1 p0)))
+             (some (lambda (p)
+                     (destructuring-bind (ax ay az) d1
+                       (destructuring-bind (bx by bz) (minus p p0)
+                         (> (+ (expt (- (* ay bz) (* az by)) 2) (expt (- (* az bx) (* ax bz)) 2)
+                               (expt (- (* ax by) (* ay bx)) 2))
+                            1d-18))))
+                   vectors))))))
+
 (define-object-kind :point-cloud (world pose points)
   (unless (and (listp points) (>= (length points) 4))
     (btr-fail ":point-cloud points ~s, expected a list of at least 4 (x y z) points" points))
+  (unless (every (lambda (p) (and (listp p) (= (length p) 3) (every #'realp p))) points)
+    (btr-fail ":point-cloud points ~s, expected (x y z) lists of reals" points))
+  (unless (spanning-points-p points)
+    (btr-fail ":point-cloud points ~s all lie on one line (or are one point); a convex hull ~
+               needs points spanning at least a plane" points))
   (values (native:add-convex-hull (world-handle world) pose points) 'item '(:point-cloud)))

@@ -9,13 +9,12 @@
            #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names
            #:rerooted-source
            #:child-joints-in-order #:movable-joint-p #:first-descendant-link #:first-descendant-joint
-           #:handle-link #:connecting-joint))
+           #:handle-link #:connecting-joint #:generate-urdf-string))
 
 (defpackage :cram-bullet-reasoning
   (:nicknames :btr)
   (:use :cl :cram-prolog :cram-utilities)
   (:local-nicknames (:native :cram-native))
-  (:shadow #:step)
   (:export
    ;; worlds
    #:bt-world #:bt-reasoning-world #:*current-bullet-world* #:world-handle #:world
@@ -49,7 +48,13 @@
    #:*visibility-threshold* #:camera-pose
    ;; Prolog interface names
    #:retract #:assert #:attached #:object-pose-on #:link
-   #:object-bottom-pose #:item #:robot-object #:with-stored-world))
+   #:object-bottom-pose #:item #:robot-object #:with-stored-world
+   ;; more of CRAM's API
+   #:with-current-bullet-world #:prolog-?w #:?w #:clear-bullet-world #:obj-pose-on
+   #:robot-attached-objects-in-collision #:calculate-bb-dims #:merge-bounding-boxes
+   #:event #:make-event #:event-world-state #:timestamp #:timeline #:timeline-init
+   #:timeline-advance #:timeline-events #:timeline-current-world-state #:timeline-lookup
+   #:*current-timeline* #:with-timeline #:occurs-in #:holds-at))
 
 (defpackage :cram-bullet-reasoning-utilities
   (:nicknames :btr-utils)

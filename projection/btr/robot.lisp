@@ -180,11 +180,34 @@ table name → value. All joints are set at once, then links and attached object
 ;;; ---- attachments -------------------------------------------------------------------------------
 
 (defun ensure-object (world designator)
-  (if (typep designator 'object) designator (object-or-fail world designator)))
+  "The object DESIGNATOR (an object, or the name of one in WORLD); an object of WORLD that was
+removed from it is an error naming it."
+  (cond ((typep designator 'object)
+         (when (and (eq (world designator) world)
+                    (not (eq (object world (name designator)) designator)))
+           (object-gone-error designator "Bullet world query"))
+         designator)
+        (t (object-or-fail world designator))))
 
 (defun attach-object (parent object &key link loose grasp)
   "Attach OBJECT (an object or name) to PARENT: a robot-object at LINK (a link name), or an item.
-Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only recorded."
+Rigid attachments (LOOSE nil) make OBJECT follow the link (or the item); loose ones are only
+recorded. As in CRAM, PARENT or OBJECT may be a list: each object is attached to each parent; a
+NIL parent warns and attaches nothing (an empty list of objects attaches nothing). Returns
+OBJECT (the list of attached objects for a list)."
+  (cond ((null parent)
+         (warn "ATTACH-OBJECT: no object to attach ~s to (the parent is NIL); nothing attached."
+               (if (typep object 'object) (name object) object))
+         nil)
+        ((consp parent)
+         (dolist (p parent object)
+           (attach-object p object :link link :loose loose :grasp grasp)))
+        ((listp object)
+         (mapcar (lambda (o) (attach-object parent o :link link :loose loose :grasp grasp)) object))
+        (t (attach-one-object parent object link loose grasp))))
+
+(defun attach-one-object (parent object link loose grasp)
+  "ATTACH-OBJECT of one OBJECT to one PARENT."
   (unless (or (typep parent 'object) (and parent (symbolp parent)))
     (btr-fail "ATTACH-OBJECT: parent ~s, expected an object of a Bullet world or an object's name"
               parent))
@@ -200,8 +223,10 @@ Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only r
                         (unless link (btr-fail "ATTACH-OBJECT: attaching ~s to ~s needs :link" (name object) (name parent)))
                         (link-index parent link))
                        (t -1))))
-    (native:attach (world-handle world) (object-handle object) (object-handle parent)
-                   :link link-i :loose loose)
+    (with-live-object (parent 'attach-object)
+      (with-live-object (object 'attach-object)
+        (native:attach (world-handle world) (object-handle object) (object-handle parent)
+                       :link link-i :loose loose)))
     (when (typep parent 'robot-object)
       (setf (%attached parent)
             (append (remove-if (lambda (a) (and (eq (first a) (name object)) (equal (second a) link)))
@@ -219,18 +244,39 @@ Rigid attachments (LOOSE nil) make OBJECT follow the link; loose ones are only r
                        (%attached parent))))
     (unless (and (typep parent 'robot-object)
                  (find (name object) (%attached parent) :key #'first))
-      (native:detach (world-handle world) (object-handle object) (object-handle parent)))
+      (with-live-object (parent 'detach-object)
+        (with-live-object (object 'detach-object)
+          (native:detach (world-handle world) (object-handle object) (object-handle parent))
+          (unless (typep parent 'robot-object)
+            ;; an attachment between two items holds whichever way it was made
+            (native:detach (world-handle world) (object-handle parent) (object-handle object))))))
     object))
 
 (defun detach-all-objects (parent)
-  "Detach everything attached to PARENT."
-  (when (typep parent 'robot-object)
-    (dolist (a (%attached parent))
-      (detach-object parent (first a)))))
+  "Detach everything attached to PARENT (a robot, or an item and the items attached to it)."
+  (dolist (a (attached-objects parent))
+    (detach-object parent (first a))))
 
-(defun attached-objects (robot)
-  "What is attached to ROBOT: a list of (object-name link-name loose grasp)."
-  (copy-list (%attached robot)))
+(defun attached-objects (object)
+  "What is attached to OBJECT. For a robot (an articulated object): a list of (object-name
+link-name loose grasp). For an item, as CRAM's object-object attachments: a list of
+(other-name loose) for each item attached to it or that it is attached to; LOOSE is true when
+that attachment is loose."
+  (cond ((typep object 'robot-object) (copy-list (%attached object)))
+        ((typep object 'object)
+         (let ((world (world object)) (handle (object-handle object)) (entries '()))
+           (flet ((name-of (h)
+                    (loop for o in (objects world) when (eql (object-handle o) h) return (name o))))
+             (loop for (child parent link loose) in (native:attachments (world-handle world))
+                   do (let ((other (cond ((and (eql parent handle) (= link -1)) child)
+                                         ((eql child handle) parent))))
+                        (when other
+                          (let ((other-object (find other (objects world) :key #'object-handle)))
+                            (when (and other-object (not (typep other-object 'robot-object)))
+                              (pushnew (list (name-of other) loose) entries
+                                       :key #'first)))))))
+           (nreverse entries)))
+        (t (btr-fail "ATTACHED-OBJECTS: ~s is not an object of a Bullet world" object))))
 
 (defun object-attached (robot object)
   "The link names of ROBOT that OBJECT (object or name) is attached to."
@@ -285,3 +331,13 @@ model of; NIL when none is."
           (and rob-int:*robot-urdf* (match (cl-urdf:name rob-int:*robot-urdf*)))))))
 
 (setf rob-int::*loaded-robot-name-function* 'loaded-robot-name)
+
+(defun loaded-environment-name ()
+  "The name of the environment object of the current world, else the keyword of the name of
+ROB-INT:*ENVIRONMENT-URDF*; NIL when there is neither."
+  (let ((environment (get-environment-object)))
+    (cond (environment (name environment))
+          (rob-int:*environment-urdf*
+           (rob-int:urdf-name->robot-name (cl-urdf:name rob-int:*environment-urdf*))))))
+
+(setf rob-int:*environment-name-function* 'loaded-environment-name)

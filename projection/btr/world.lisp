@@ -152,6 +152,7 @@ moves any more, the remaining steps are skipped, see CRAM-NATIVE:SIMULATE)."
     (native:simulate (world-handle world) (coerce seconds 'double-float) (coerce dt 'double-float))
     world))
 
-(defun step (world &optional (dt 0.01d0))
-  "Advance WORLD's physics by one step of DT seconds."
+(defun step-world (world &optional (dt 0.01d0))
+  "Advance WORLD's physics by one step of DT seconds (the Prolog predicate STEP, which is
+CL:STEP as in CRAM, so that BTR can be used next to COMMON-LISP)."
   (simulate world dt dt))

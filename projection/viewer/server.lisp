@@ -15,7 +15,24 @@
 (defvar *viewer-host* "127.0.0.1" "Default address the viewer listens on (loopback).")
 (defvar *acceptor* nil "The running hunchentoot acceptor, or NIL.")
 (defvar *watched* nil "Weak pointer to the world the live page shows (NIL: the current one).")
-(defvar *reports* '() "Test hook: JSON texts the page posted to /report, newest first.")
+(defvar *reports* '()
+  "Test hook: JSON texts the page posted to /report, newest first; at most *MAX-REPORTS*.")
+(defparameter *max-reports* 4 "How many /report texts *REPORTS* keeps (the newest).")
+(defparameter *max-report-bytes* (* 8 1024 1024)
+  "The largest /report body accepted, in bytes (the page's report may hold a PNG picture).")
+
+(defun record-report ()
+  "Keep the body of a POST to /report in *REPORTS* (the newest *MAX-REPORTS* of them); a body
+longer than *MAX-REPORT-BYTES* (or of unknown length) is refused unread with status 413."
+  (let ((length (ignore-errors (parse-integer (or (hunchentoot:header-in* :content-length) "")))))
+    (cond ((or (null length) (> length *max-report-bytes*))
+           (setf (hunchentoot:return-code*) hunchentoot:+http-request-entity-too-large+)
+           (reply "text/plain" (format nil "a report is at most ~d bytes" *max-report-bytes*)))
+          (t
+           (let ((body (or (hunchentoot:raw-post-data :force-text t) "")))
+             (setf *reports* (cons body (subseq *reports* 0 (min (length *reports*)
+                                                                 (1- *max-reports*))))))
+           (reply "text/plain" "ok")))))
 (defvar *live-overlays* '() "Overlays of the live view (SHOW-COSTMAP, SHOW-POSES, SHOW-TARGET).")
 
 (defun three-file (name)
@@ -137,9 +154,7 @@ in green."
         ((string= path "/runs.json") (reply "application/json" (json-string (runs-summary))))
         ((string= path "/run.json") (reply "application/json" (json-string (run-json (find-run (run-parameter))))))
         ((string= path "/events") (stream-events))
-        ((string= path "/report")
-         (push (or (hunchentoot:raw-post-data :force-text t) "") *reports*)
-         (reply "text/plain" "ok"))
+        ((string= path "/report") (record-report))
         (t (not-found path))))
 
 (defun runs-summary ()

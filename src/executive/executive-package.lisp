@@ -41,14 +41,23 @@
    #:process-module-running-p #:pm-execute #:pm-execute-matching
    #:matching-process-modules #:matching-process-module #:available-process-module
    #:process-module-error #:process-module-error-name
-   #:no-matching-process-module #:no-matching-process-module-designator))
+   #:no-matching-process-module #:no-matching-process-module-designator
+   #:resolve-process-module-name
+   ;; asynchronous process modules
+   #:def-asynchronous-process-module #:asynchronous-process-module
+   #:asynchronous-process-module-name #:on-input #:on-cancel #:on-run #:synchronization-fluent
+   #:finish-process-module #:fail-process-module #:monitor-process-module))
 
 (defpackage :cram-projection
   (:nicknames :proj)
   (:use :cl)
   (:export
    #:define-projection-environment #:with-projection-environment #:*projection-environment*
-   #:projection-environment-names #:projection-environment-process-modules))
+   #:projection-environment-names #:projection-environment-process-modules
+   ;; clocks and special projection variables
+   #:clock-time #:clock-wait #:linear-clock #:partially-ordered-clock
+   #:partially-ordered-clock-enabled #:with-partially-ordered-clock-disabled
+   #:define-special-projection-variable))
 
 (defpackage :cram-executive
   (:nicknames :exe)

@@ -92,24 +92,60 @@ leading docstring in BODY documents the module."
   "True when the process module NAME is running in the current dynamic context."
   (and (member name *running-process-modules*) t))
 
-(defun call-with-process-modules-running (names thunk)
-  (dolist (name names)
-    (unless (and (symbolp name) name)
-      (error "WITH-PROCESS-MODULES-RUNNING: expected process module names, got ~s." name))
-    (find-process-module name))
-  (let ((*running-process-modules* (union names *running-process-modules*)))
+(defvar *process-module-aliases* '()
+  "Alist (alias . process-module-name) of the aliases WITH-PROCESS-MODULES-RUNNING gave.")
+
+(pushnew '*process-module-aliases* cpl:*inherited-specials*)
+
+(defun resolve-process-module-name (name)
+  "The process module NAME stands for: itself, or the module it is an alias of."
+  (or (cdr (assoc name *process-module-aliases*)) name))
+
+(defgeneric call-with-process-module-running (module alias thunk)
+  (:documentation "Call THUNK while MODULE runs under the name ALIAS. Modules with a life of
+their own (asynchronous ones) start and stop around THUNK.")
+  (:method ((module process-module) alias thunk)
+    (declare (ignore alias))
     (funcall thunk)))
 
+(defun call-with-process-modules-running (entries thunk)
+  (let ((names '()) (aliases '()))
+    (dolist (entry entries)
+      (multiple-value-bind (alias name)
+          (cond ((and entry (symbolp entry)) (values entry entry))
+                ((and (consp entry) (= (length entry) 2) (every #'symbolp entry)
+                      (first entry) (second entry))
+                 (values (first entry) (second entry)))
+                (t (error "WITH-PROCESS-MODULES-RUNNING: expected process module names or ~
+                           (alias name) lists, got ~s." entry)))
+        (find-process-module name)
+        (push alias names)
+        (unless (eq alias name) (push (cons alias name) aliases))))
+    (let ((*running-process-modules* (union (reverse names) *running-process-modules*))
+          (*process-module-aliases* (append aliases *process-module-aliases*)))
+      (labels ((run (names)
+                 (if (null names)
+                     (funcall thunk)
+                     (call-with-process-module-running
+                      (find-process-module (resolve-process-module-name (first names)))
+                      (first names)
+                      (lambda () (run (rest names)))))))
+        (run (reverse names))))))
+
 (defmacro with-process-modules-running ((&rest module-names) &body body)
-  "Run BODY with the process modules MODULE-NAMES (unquoted symbols) available to
-PM-EXECUTE and PERFORM, in this thread and in the plan tasks it starts. Unknown names signal
-a PROCESS-MODULE-ERROR before BODY runs."
+  "Run BODY with the process modules MODULE-NAMES (unquoted symbols, or (alias name) lists as
+in CRAM, the module then known by the alias) available to PM-EXECUTE and PERFORM, in this
+thread and in the plan tasks it starts. Unknown names signal a PROCESS-MODULE-ERROR before
+BODY runs."
   `(call-with-process-modules-running ',module-names (lambda () ,@body)))
+
+(defvar *executing-process-module* nil
+  "The name (or alias) under which PM-EXECUTE calls the running process module.")
 
 (defun pm-execute (name designator)
   "Execute DESIGNATOR with the running process module NAME and return its result. Calls to
 the same module are serialised."
-  (let ((module (find-process-module name)))
+  (let ((module (find-process-module (resolve-process-module-name name))))
     (unless (process-module-running-p name)
       (error 'process-module-error
              :name name
@@ -118,7 +154,8 @@ the same module are serialised."
                              *running-process-modules*)))
     (sb-thread:with-recursive-lock ((process-module-lock module))
       (cpl:with-task-tree-node (:process-module name :designator designator)
-        (funcall (process-module-function module) designator)))))
+        (let ((*executing-process-module* name))
+          (funcall (process-module-function module) designator))))))
 
 (prolog:def-fact-group process-module-matching (matching-process-module)
   ;; (matching-process-module ?designator ?module-name): layers add one rule per module.

@@ -64,7 +64,7 @@ STARTUP and SHUTDOWN: forms run after binding and when leaving (even by a non-lo
 (defun call-with-projection-environment (name thunk)
   (let ((runner (car (find-projection-environment name)))
         (*projection-environment* name))
-    (funcall runner thunk)))
+    (call-with-special-projection-variables (lambda () (funcall runner thunk)))))
 
 (defmacro with-projection-environment (name &body body)
   "Run BODY inside the projection environment NAME (an unquoted symbol; any other form is

@@ -28,7 +28,7 @@
    #:retry-with-designator-solutions #:retry-with-list-solutions
    #:retry-with-loc-designator-solutions
    #:designator-next-solution #:designator-reset
-   #:designator-next-different-location-solution
+   #:designator-next-different-location-solution #:next-different-location-solution
    #:*default-location-distance-threshold* #:*default-location-angle-threshold*))
 
 (in-package :cram-common-failures)

@@ -157,3 +157,19 @@ propagating."
                   (cpl:log-message :warn ,tags "No more elements of ~a to try." ',list)))))
        (cpl:log-message :warn ,tags "Giving up retrying after: ~a" ,cause)
        (rethrow ,rethrow-failure ,cause))))
+
+(defun next-different-location-solution (designator
+                                         &optional (distance-threshold
+                                                    *default-location-distance-threshold*)
+                                           (angle-threshold *default-location-angle-threshold*))
+  "The next solution of the location DESIGNATOR whose pose is at least DISTANCE-THRESHOLD
+metres or ANGLE-THRESHOLD radians away from its current one, or NIL when there is none (the
+designator layer's DESIG:NEXT-DIFFERENT-LOCATION-SOLUTION, under the name CRAM's failure
+handling code calls)."
+  (unless (and (realp distance-threshold) (>= distance-threshold 0))
+    (error "NEXT-DIFFERENT-LOCATION-SOLUTION: the distance threshold ~s is not a non-negative ~
+            number of metres." distance-threshold))
+  (unless (and (realp angle-threshold) (>= angle-threshold 0))
+    (error "NEXT-DIFFERENT-LOCATION-SOLUTION: the angle threshold ~s is not a non-negative ~
+            number of radians." angle-threshold))
+  (designator-next-different-location-solution designator distance-threshold angle-threshold))

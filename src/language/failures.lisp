@@ -50,22 +50,43 @@ CLASS-NAME accepts."
            (error "FAIL: expected a format string, a condition object or a ~
                    condition class name, got ~s." first)))))
 
-(defun fail (&rest arguments)
-  "Signal a plan failure. ARGUMENTS are a format control string and its
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defclass failure-generic-function (standard-generic-function) ()
+    (:metaclass sb-mop:funcallable-standard-class)
+    (:documentation "The class of FAIL: a generic function whose first argument may be left
+out (it defaults to the format string \"Plan failure.\")."))
+
+  (defmethod sb-mop:compute-discriminating-function ((function failure-generic-function))
+    (let ((dispatch (call-next-method)))
+      (lambda (&rest arguments)
+        (if arguments
+            (apply dispatch arguments)
+            (funcall dispatch "Plan failure."))))))
+
+(defgeneric fail (datum &rest arguments)
+  (:generic-function-class failure-generic-function)
+  (:documentation "Signal a plan failure. DATUM and ARGUMENTS are a format control string and its
 arguments (giving a SIMPLE-PLAN-FAILURE), a condition object, or a condition
 class name followed by initargs; with no arguments a SIMPLE-PLAN-FAILURE is
 signalled. Inside a task a plan failure is signalled with SIGNAL, so handlers
 of WITH-FAILURE-HANDLING run before anything unwinds, and a failure nobody
 handles ends the task. A condition that is not a PLAN-FAILURE, or any failure
-outside a task, is raised with ERROR. Never returns."
-  (let ((condition (coerce-to-failure arguments)))
-    (if (and *current-task* (typep condition 'plan-failure))
-        (progn
-          (signal condition)
-          ;; Every task thread handles PLAN-FAILURE at its root, so SIGNAL
-          ;; only returns if a handler declined and no root handler exists.
-          (error condition))
-        (error condition))))
+outside a task, is raised with ERROR. Never returns.
+FAIL is a generic function: specialise DATUM with methods of your own (e.g. to turn
+objects of your classes into failures, or to log with a :BEFORE method); DATUM may be left out.
+The default method handles strings, condition objects and condition class names.")
+  (:method ((datum t) &rest arguments)
+    (signal-failure (coerce-to-failure (cons datum arguments)))))
+
+(defun signal-failure (condition)
+  "Signal the failure CONDITION the way FAIL does; never returns."
+  (if (and *current-task* (typep condition 'plan-failure))
+      (progn
+        (signal condition)
+        ;; Every task thread handles PLAN-FAILURE at its root, so SIGNAL
+        ;; only returns if a handler declined and no root handler exists.
+        (error condition))
+      (error condition)))
 
 ;;; WITH-FAILURE-HANDLING
 

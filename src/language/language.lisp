@@ -140,22 +140,36 @@ an empty composite failure). Must run inside a plan."
 (defmacro def-cram-function (name lambda-list &body body)
   "Define a plan function: a DEFUN whose body runs as a :PLAN node named NAME
 in the task tree of the running top-level (outside a plan it is an ordinary
-function)."
+function). (:TAG name form...) forms in BODY are tagged tasks (see WITH-TAGS), and
+WALKER:EXPAND-PLAN expands calls of NAME into BODY."
   (check-type name symbol)
   (multiple-value-bind (forms declarations docstring) (split-definition-body body)
-    `(defun ,name ,lambda-list
-       ,@(when docstring (list docstring))
-       ,@declarations
-       (with-task-tree-node (:plan ',name)
-         (block ,name ,@forms)))))
+    `(progn
+       (cram-walker:register-plan ',name ',lambda-list ',forms)
+       (defun ,name ,lambda-list
+         ,@(when docstring (list docstring))
+         ,@declarations
+         (with-task-tree-node (:plan ',name)
+           (block ,name (with-tags ,@forms)))))))
 
 (defmacro def-top-level-cram-function (name lambda-list &body body)
   "Define a function that runs its body as a top-level plan named NAME (see
-NAMED-TOP-LEVEL) each time it is called."
+NAMED-TOP-LEVEL) each time it is called; (:TAG name form...) forms in BODY are tagged
+tasks."
   (check-type name symbol)
   (multiple-value-bind (forms declarations docstring) (split-definition-body body)
-    `(defun ,name ,lambda-list
-       ,@(when docstring (list docstring))
-       ,@declarations
-       (named-top-level (:name ',name)
-         (block ,name ,@forms)))))
+    `(progn
+       (cram-walker:register-plan ',name ',lambda-list ',forms)
+       (defun ,name ,lambda-list
+         ,@(when docstring (list docstring))
+         ,@declarations
+         (named-top-level (:name ',name)
+           (block ,name (with-tags ,@forms)))))))
+
+(defmacro def-plan (name lambda-list &body body)
+  "CRAM's older name of DEF-CRAM-FUNCTION."
+  `(def-cram-function ,name ,lambda-list ,@body))
+
+(defmacro def-top-level-plan (name lambda-list &body body)
+  "CRAM's older name of DEF-TOP-LEVEL-CRAM-FUNCTION."
+  `(def-top-level-cram-function ,name ,lambda-list ,@body))

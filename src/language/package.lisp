@@ -4,6 +4,13 @@
   (:nicknames :cpl :cpl-impl)
   (:use :cl)
   (:shadow #:sleep)
+  (:import-from :cram-walker #:plan-tree-node #:plan-tree-node-sexp #:plan-tree-node-parent
+                #:plan-tree-node-children #:plan-tree-node-path #:find-plan-node #:expand-plan)
+  ;; every external symbol of COMMON-LISP (but SLEEP), so that (:use :cpl) alone is a working
+  ;; package, as in CRAM
+  (:export . #.(let ((names '()))
+                 (do-external-symbols (s :common-lisp (sort names #'string<))
+                   (unless (string= (symbol-name s) "SLEEP") (push (symbol-name s) names)))))
   (:export
    ;; tasks and plan macros
    #:top-level #:named-top-level #:seq #:par #:pursue #:try-all
@@ -13,6 +20,14 @@
    #:current-task-p #:*inherited-specials* #:with-evaporation-deferred
    #:not-inside-plan-error #:nested-top-level-error
    #:task-exit-error #:task-exit-task-name
+   ;; the task interface
+   #:status #:result #:task-dead #:task-alive #:task-running-p #:task-dead-p #:task-failed-p
+   #:task-done-p #:join-task #:toplevel-task #:tagged-task #:with-tags #:partial-order
+   #:suspend #:wake-up #:on-suspension #:with-task-suspended
+   #:sleep* #:fl-pulsed #:fl-value-changed #:def-cpl-parameter
+   #:def-plan #:def-top-level-plan
+   #:plan-tree-node #:plan-tree-node-sexp #:plan-tree-node-parent #:plan-tree-node-children
+   #:plan-tree-node-path #:find-plan-node #:expand-plan
    ;; failures
    #:plan-failure #:simple-plan-failure #:composite-failure #:composite-failures
    #:common-lisp-error-envelope #:envelop-error

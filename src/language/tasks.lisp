@@ -76,6 +76,7 @@ a long or blocking wait."
   `(sb-sys:without-interrupts ,@body))
 
 (defun task-done-p (task)
+  "True once TASK has ended: succeeded, failed or evaporated."
   (member (task-status task) '(:succeeded :failed :evaporated)))
 
 (defun finish-task (task status values failure)
@@ -85,7 +86,8 @@ a long or blocking wait."
             (task-values task) values
             (task-failure task) failure
             (task-finish-order task) (incf (task-group-finished group)))
-      (sb-thread:condition-broadcast (task-group-condition group)))))
+      (sb-thread:condition-broadcast (task-group-condition group)))
+    (note-task-status task)))
 
 (defun evaporate-self (task)
   "Run by an interrupt inside TASK's thread: unwind it if it may be evaporated."
@@ -189,7 +191,8 @@ given node is used."
           (when thread
             (sb-thread:join-thread thread :default nil))
           (unless (task-done-p task)
-            (setf (task-status task) :evaporated)))))))
+            (setf (task-status task) :evaporated)
+            (note-task-status task)))))))
 
 (defun group-tasks-in-order (group)
   (sort (copy-list (task-group-tasks group)) #'< :key #'task-index))

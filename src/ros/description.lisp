@@ -34,9 +34,10 @@ repository root (where cram-plans.asd is)."
                          (format nil "~s" text))))
   text)
 
-(defun robot-description-string (&key (parameter "robot_description") fallback-file)
-  "The URDF text in the ROS parameter PARAMETER (resolved in the node's namespace, so
-\"robot_description\" is /robot_description) while a node runs (see STARTUP-ROS); when no node
+(defun robot-description-string (&key (parameter rob-int:*robot-description-parameter*)
+                                      fallback-file)
+  "The URDF text in the ROS parameter PARAMETER (by default ROB-INT:*ROBOT-DESCRIPTION-PARAMETER*;
+resolved in the node's namespace, so \"robot_description\" is /robot_description) while a node runs (see STARTUP-ROS); when no node
 runs, or the parameter is unset, the contents of FALLBACK-FILE (a pathname or namestring;
 relative ones are relative to the repository root, e.g. \"robots/pr2/pr2.urdf\").
 Returns (values urdf-text source), SOURCE being the parameter's name (a string) or the file's

@@ -109,7 +109,7 @@ replaces it in place. Returns NAME."
 name returning (values value present-p full-name)) describe, and a text saying why; NIL when no
 description parameter is set at all. Errors (ROS-WORLD-ERROR) when the parameters contradict
 every world, or fit several."
-  (multiple-value-bind (robot-urdf robot-present robot-param) (funcall parameter-reader "robot_description")
+  (multiple-value-bind (robot-urdf robot-present robot-param) (funcall parameter-reader rob-int:*robot-description-parameter*)
     (let* ((robot (and robot-present (urdf-robot-name robot-urdf)))
            (environments (remove-if-not (lambda (w)
                                           (nth-value 1 (funcall parameter-reader

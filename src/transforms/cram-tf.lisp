@@ -65,6 +65,11 @@ or :Z) of its reference frame; the origin stays. Returns the same kind of pose."
         (copy-pose-stamped pose :orientation orientation)
         (copy-pose pose :orientation orientation))))
 
+(defun angle-around-map-z (angle)
+  "The QUATERNION turning by ANGLE radians about the z axis of the map (a yaw)."
+  (axis-angle->quaternion (make-3d-vector 0 0 1)
+                          (cl-transforms::ensure-double angle "ANGLE-AROUND-MAP-Z angle")))
+
 (defun %offset-vector (vector x-offset y-offset z-offset)
   "VECTOR moved by the offsets along the axes of its own frame."
   (v+ vector (make-3d-vector x-offset y-offset z-offset)))

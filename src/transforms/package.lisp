@@ -17,7 +17,7 @@
    #:v-norm #:v-dist #:normalize-vector #:interpolate-vector
    ;; quaternions
    #:quaternion #:quaternion-p #:make-quaternion #:make-identity-rotation #:copy-quaternion
-   #:q* #:q-inv #:q= #:q-dot #:normalize #:is-normalized #:rotate
+   #:q* #:q-inv #:q= #:q-dot #:q+ #:q- #:q-norm #:normalize #:is-normalized #:rotate
    #:axis-angle->quaternion #:quaternion->axis-angle
    #:euler->quaternion #:quaternion->euler #:get-yaw #:yaw
    #:angle-between-quaternions #:normalize-angle #:slerp
@@ -74,7 +74,7 @@
    #:*robot-torso-joint* #:*robot-left-tool-frame* #:*robot-right-tool-frame*
    #:*tf-default-timeout*
    #:robot-current-pose #:frame-to-pose-in-fixed-frame
-   #:rotate-pose #:translate-pose #:translate-transform-stamped
+   #:rotate-pose #:angle-around-map-z #:translate-pose #:translate-transform-stamped
    #:pose-stamped->transform-stamped #:transform-stamped->pose-stamped #:strip-transform-stamped
    #:pose->transform-stamped #:transform-stamped-inv #:multiply-transform-stampeds
    #:apply-transform #:copy-transform-stamped

@@ -106,10 +106,15 @@ inline, so that composing transforms allocates one object."
   (%make-pose (make-3d-vector x y 0) (yaw theta)))
 
 (defun make-transform (translation rotation)
-  "A TRANSFORM with TRANSLATION (a 3D-VECTOR) and ROTATION (a QUATERNION)."
+  "A TRANSFORM with TRANSLATION (a 3D-VECTOR) and ROTATION (a QUATERNION; a real r stands for
+the quaternion (0 0 0 r), as in cl-transforms, so 1 is the identity)."
   (%make-transform
    (check-type-of translation '3d-vector "a 3D-VECTOR as translation" 'make-transform)
-   (check-type-of rotation 'quaternion "a QUATERNION as rotation" 'make-transform)))
+   (if (quaternion-p rotation)
+       rotation
+       (if (realp rotation)
+           (ensure-rotation rotation 'make-transform)
+           (input-error rotation "a QUATERNION or a real as rotation" 'make-transform)))))
 
 (defun make-identity-transform ()
   "The identity TRANSFORM."

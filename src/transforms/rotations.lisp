@@ -199,3 +199,59 @@ A block that is not a rotation signals TRANSFORM-INPUT-ERROR."
                                    (/ (+ (aref m 1 2) (aref m 2 1)) s)
                                    (* 0.25d0 s)
                                    (/ (- (aref m 1 0) (aref m 0 1)) s)))))))))
+
+;;; Quaternion arithmetic of cl-transforms' API. A real r stands for the quaternion (0 0 0 r), as
+;;; in cl-transforms. QUATERNIONs of this library are rotations, always of unit length, so sums
+;;; and differences come back normalised: (q+ a b) is the rotation half-way between A and B when
+;;; they are close, (q- q) the same rotation as Q.
+
+(defun %quaternion-components (q place)
+  "The components of Q (a QUATERNION, a real r as (0 0 0 r), or a list (x y z w) of reals) as
+four double-float values."
+  (cond ((quaternion-p q) (values (%q-x q) (%q-y q) (%q-z q) (%q-w q)))
+        ((realp q) (values 0d0 0d0 0d0 (ensure-double q place)))
+        ((and (alexandria:proper-list-p q) (= (length q) 4))
+         (values (ensure-double (first q) place) (ensure-double (second q) place)
+                 (ensure-double (third q) place) (ensure-double (fourth q) place)))
+        (t (input-error q "a QUATERNION, a real or a list (x y z w)" place))))
+
+(defun q-norm (q)
+  "The Euclidean norm of Q's four components: 1 for every QUATERNION of this library, |r| for a
+real r, the length of a list (x y z w)."
+  (multiple-value-bind (x y z w) (%quaternion-components q 'q-norm)
+    (sqrt (+ (* x x) (* y y) (* z z) (* w w)))))
+
+(defun %q-combine (function place quaternions)
+  "The QUATERNION (normalised) of FUNCTION folded over the components of QUATERNIONS."
+  (let ((sum (list 0d0 0d0 0d0 0d0)) (first t))
+    (dolist (q quaternions)
+      (let ((components (multiple-value-list (%quaternion-components q place))))
+        (setf sum (if first components (mapcar function sum components))
+              first nil)))
+    (destructuring-bind (x y z w) sum
+      (unless (> (+ (* x x) (* y y) (* z z) (* w w)) 1d-24)
+        (input-error quaternions "quaternions whose combination is not zero" place))
+      (apply #'make-quaternion sum))))
+
+(defun q+ (&rest quaternions)
+  "The component-wise sum of QUATERNIONS (QUATERNIONs, reals as (0 0 0 r), or lists (x y z w)),
+normalised to a rotation; (q+) is the identity. A sum of zero (e.g. Q and -Q) is an error."
+  (if (null quaternions)
+      (make-identity-rotation)
+      (%q-combine #'+ 'q+ quaternions)))
+
+(defun q- (q &rest quaternions)
+  "Q minus each of QUATERNIONS component-wise, normalised to a rotation; (q- q) negates Q's
+components, which is the same rotation. A difference of zero is an error."
+  (if (null quaternions)
+      (multiple-value-bind (x y z w) (%quaternion-components q 'q-)
+        (make-quaternion (- x) (- y) (- z) (- w)))
+      (%q-combine #'- 'q- (cons q quaternions))))
+
+(defun ensure-rotation (rotation place)
+  "ROTATION as a QUATERNION: a QUATERNION as it is, a real r as the rotation of (0 0 0 r) (the
+identity for r > 0), a list (x y z w) normalised."
+  (if (quaternion-p rotation)
+      rotation
+      (multiple-value-bind (x y z w) (%quaternion-components rotation place)
+        (make-quaternion x y z w))))

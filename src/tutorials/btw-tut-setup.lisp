@@ -17,8 +17,9 @@
 
 (in-package :cram-bullet-world-tutorial)
 
-(defparameter *robot-parameter* "robot_description"
-  "The ROS parameter holding the robot URDF.")
+(defparameter *robot-parameter* nil
+  "The ROS parameter holding the robot URDF; NIL: the one ROB-INT:*ROBOT-DESCRIPTION-PARAMETER*
+names (\"robot_description\").")
 (defparameter *kitchen-parameter* "kitchen_description"
   "The ROS parameter holding the kitchen URDF.")
 
@@ -33,7 +34,9 @@ FALLBACK-FILE (relative to the repository root)."
 
 (defun get-robot-urdf ()
   "The PR2 URDF: from the parameter *ROBOT-PARAMETER* under ROS, else robots/pr2/pr2.urdf."
-  (or *robot-urdf* (setf *robot-urdf* (read-urdf *robot-parameter* "robots/pr2/pr2.urdf"))))
+  (or *robot-urdf*
+      (setf *robot-urdf* (read-urdf (or *robot-parameter* rob-int:*robot-description-parameter*)
+                                    "robots/pr2/pr2.urdf"))))
 
 (defun get-kitchen-urdf ()
   "The kitchen URDF: from *KITCHEN-PARAMETER* under ROS, else resources/iai_kitchen.urdf."
@@ -65,6 +68,7 @@ node runs, else from the project's files."
          (robot-name (rob-int:set-robot-name (cl-urdf:name robot)))
          (kitchen-name (rob-int:urdf-name->robot-name (cl-urdf:name kitchen))))
     (setf rob-int:*robot-urdf* robot
+          rob-int:*environment-urdf* kitchen
           btr:*environment-name* kitchen-name
           cram-tf:*robot-base-frame* (or (rob-int::first-solution-value
                                           '?f `(rob-int:robot-base-frame ,robot-name ?f))

@@ -51,6 +51,7 @@ URDF re-rooted at *PEPPER-ROOT-LINK* so that it stands on the floor."
                                                              "resources/dm_shelves.urdf"))))
          (robot-name (rob-int:set-robot-name (cl-urdf:name robot))))
     (setf rob-int:*robot-urdf* robot
+          rob-int:*environment-urdf* kitchen
           btr:*environment-name* :kitchen
           ;; the frame of the robot's pose in the belief state (its root), which CRAM-TF
           ;; reports as the robot's pose; the ROBOT-BASE-FRAME fact (base_link) names the torso

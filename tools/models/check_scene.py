@@ -7,8 +7,9 @@
    supporting box is at the bottle's bottom (within BOTTLE_GAP) and the bottle's
    centre lies over it.
 3. The PR2 base (a 0.668 m square) at every tutorial base pose overlaps no
-   kitchen shape in 2D, and those cells are free in the kitchen map, while the
-   cells under the table and the island are occupied.
+   kitchen shape in 2D (below a given height for a pose under a table's edge),
+   and those cells are free in the kitchen map, while the cells under the table
+   and the island are occupied.
 4. The object meshes are closed shells with the extents of the facts.
 Exits 1 when a check fails.
 """
@@ -49,6 +50,9 @@ BASE_POSES = [
     ("*base-pose-near-table*", -1.447, -0.150, -math.pi / 2),
     ("*base-pose-near-counter*", -0.15, 2.0, math.pi),
     ("grasp-base-pose (counter)", -1.8547, -0.381, -math.pi / 2),
+    # the 2017 tutorial's pose in front of the right side of the table: the base stands
+    # under the edge of the table top (0.729 .. 0.759 m), clear of its legs
+    ("seed 001 meal-table right", -2.0547, -0.481, -math.pi / 2, 0.70),
     ("sink navigation goal", 0.75, 0.70, 0.0),
     ("island navigation goal", -0.2, 1.5, math.pi),
     ("integration-test goal", 0.7, 0.7, 0.0),
@@ -181,8 +185,9 @@ def clearance(square, poly):
 
 
 def check_bases(rep, kitchen, grid, res, origin):
-    feet = rasterize_map.footprints(kitchen, 0.0, 1.9)
-    for name, x, y, yaw in BASE_POSES:
+    for name, x, y, yaw, *top in BASE_POSES:
+        # shapes from the floor up to 1.9 m, or up to TOP for a pose under a table's edge
+        feet = rasterize_map.footprints(kitchen, 0.0, top[0] if top else 1.9)
         square = pr2_square(x, y, yaw)
         hits = [link for link, poly in feet if rasterize_map.polygons_overlap(square, poly)]
         near = min((clearance(square, poly), link) for link, poly in feet)

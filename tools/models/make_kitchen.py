@@ -32,7 +32,8 @@ ROOM_OFFSET_Y = 0.03          # world_room_joint: room_link is 0.03 along +y of 
 TABLE_TOP = 0.759             # world z of the table top
 TABLE_X = (-2.40, -0.85)      # world x range of the table top
 TABLE_Y = (-1.09, -0.73)      # world y range of the table top
-TABLE_LEGS_Y = (-0.915, -0.76)  # world y of the leg rows (in front of the low wall)
+TABLE_LEGS_Y = (-0.915, -0.865)  # world y of the leg rows (in front of the low wall, and
+                                 # behind the PR2 base at seed 001's (-2.0547, -0.481, -pi/2))
 ISLAND_OVERHANG = 0.065
 
 CARCASS_MESHES = {"SinkArea.obj": False, "IslandArea.obj": False, "OvenArea.obj": True,

@@ -1,0 +1,89 @@
+;;;; CRAM's view of a costmap's values: GET-COST-MAP and GET-MAP-VALUE give the normalised grid
+;;;; (a probability distribution summing to 1), GEN-COSTMAP-SAMPLE-POINT draws one point from it.
+
+(in-package :cram-location-costmap)
+
+(define-condition no-cost-functions-registered (error)
+  ((costmap :initarg :costmap :initform nil :reader no-cost-functions-costmap))
+  (:report (lambda (c s)
+             (format s "The location costmap ~a has no cost functions: register one with ~
+                        REGISTER-COST-FUNCTION before reading its values."
+                     (no-cost-functions-costmap c))))
+  (:documentation "Signalled when the values of a costmap without cost functions are asked for."))
+
+(defun check-costmap (costmap function)
+  (unless (typep costmap 'location-costmap)
+    (error "~s: ~s is not a location costmap (see MAKE-LOCATION-COSTMAP)." function costmap))
+  (unless (cost-functions costmap)
+    (error 'no-cost-functions-registered :costmap costmap)))
+
+(defun normalized-grid (costmap)
+  "(values grid total): COSTMAP's grid divided by the sum of its cells, and that sum."
+  (let ((cached (%normalized costmap)))
+    (if cached
+        (values (cdr cached) (car cached))
+        (let* ((raw (cost-grid costmap))
+               (total (loop for i below (array-total-size raw) sum (row-major-aref raw i))))
+          (declare (type (simple-array double-float (* *)) raw) (type double-float total))
+          (when (zerop total)
+            (error 'invalid-probability-distribution
+                   :costmap costmap
+                   :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
+                                   (mapcar #'first (cost-functions costmap)))))
+          (let ((grid (make-array (array-dimensions raw) :element-type 'double-float)))
+            (dotimes (i (array-total-size raw))
+              (setf (row-major-aref grid i) (/ (row-major-aref raw i) total)))
+            (setf (%normalized costmap) (cons total grid))
+            (values grid total))))))
+
+(defun get-cost-map (costmap)
+  "The value grid of COSTMAP as a probability distribution: a (rows x columns) double-float
+array (row = y index, column = x index) whose cells sum to 1, each proportional to the product
+of the cost functions at the cell's centre.  A costmap without cost functions signals
+NO-COST-FUNCTIONS-REGISTERED, one whose cells are all 0 INVALID-PROBABILITY-DISTRIBUTION."
+  (check-costmap costmap 'get-cost-map)
+  (values (normalized-grid costmap)))
+
+(defun get-map-value (costmap x y)
+  "The normalised value (see GET-COST-MAP) of COSTMAP's cell containing the map point (X Y); 0
+outside the grid."
+  (unless (typep costmap 'location-costmap)
+    (error "GET-MAP-VALUE: ~s is not a location costmap (see MAKE-LOCATION-COSTMAP)." costmap))
+  (loop for (what value) in `(("x" ,x) ("y" ,y))
+        unless (finite-real-p value)
+          do (error "GET-MAP-VALUE: the ~a coordinate is ~s, expected a finite real (metres)."
+                    what value))
+  (check-costmap costmap 'get-map-value)
+  (let ((grid (normalized-grid costmap))
+        (c (floor (- x (origin-x costmap)) (resolution costmap)))
+        (r (floor (- y (origin-y costmap)) (resolution costmap))))
+    (if (and (< -1 r (costmap-rows costmap)) (< -1 c (costmap-columns costmap)))
+        (aref grid r c)
+        0d0)))
+
+(defun gen-costmap-sample-point (costmap &key sampling-function)
+  "One point drawn from COSTMAP as a probability distribution, as a CL-TRANSFORMS:3D-VECTOR at
+the centre of the drawn cell, its z one of the heights of the height generators (0 without
+any).  SAMPLING-FUNCTION, when given, is called with the normalised grid (GET-COST-MAP) and
+returns the cell as (column row); by default the cell is drawn with the costmap's own seeded
+random state."
+  (check-costmap costmap 'gen-costmap-sample-point)
+  (let ((random-state (costmap-random-state costmap)))
+    (multiple-value-bind (column row)
+        (if sampling-function
+            (let ((cell (funcall sampling-function (get-cost-map costmap))))
+              (unless (and (listp cell) (= (length cell) 2)
+                           (typep (first cell) `(integer 0 (,(costmap-columns costmap))))
+                           (typep (second cell) `(integer 0 (,(costmap-rows costmap)))))
+                (error "GEN-COSTMAP-SAMPLE-POINT: the sampling function ~s gave ~s, expected ~
+                        (column row) of a cell of the ~dx~d grid."
+                       sampling-function cell (costmap-columns costmap) (costmap-rows costmap)))
+              (values (first cell) (second cell)))
+            (multiple-value-bind (row column)
+                (floor (draw-cell (costmap-distribution costmap) random-state)
+                       (costmap-columns costmap))
+              (values column row)))
+      (let* ((x (cell-center-x costmap column))
+             (y (cell-center-y costmap row))
+             (heights (generate-heights costmap x y)))
+        (cl-transforms:make-3d-vector x y (elt heights (random (length heights) random-state)))))))

@@ -1,0 +1,175 @@
+;;;; Tests of more of CRAM's BTR API: STEP is CL:STEP, attachments of lists and between items,
+;;;; WITH-CURRENT-BULLET-WORLD, PROLOG-?W, CLEAR-BULLET-WORLD, OBJ-POSE-ON, bounding boxes,
+;;;; ROBOT-ATTACHED-OBJECTS-IN-COLLISION, timelines, GENERATE-URDF-STRING.
+
+(defpackage :cram-btr-api-tests
+  (:use :cl :fiveam)
+  (:import-from :cram-prolog #:prolog)
+  (:import-from :cram-utilities #:force-ll #:var-value))
+
+(in-package :cram-btr-api-tests)
+
+(def-suite btr-api :in cram-plans-tests:all :description "More of CRAM's BTR API.")
+(in-suite btr-api)
+
+(defun small-world ()
+  "A new current world with a table and two boxes on it."
+  (let ((w (make-instance 'btr:bt-reasoning-world)))
+    (setf btr:*current-bullet-world* w)
+    (btr:add-object w :box 'table '((0 0 0.35) (0 0 0 1)) :size '(1 1 0.7))
+    (btr:add-object w :box 'tray '((0 0 0.72) (0 0 0 1)) :size '(0.3 0.3 0.04) :mass 0.5)
+    (btr:add-object w :box 'cup '((0 0 0.79) (0 0 0 1)) :size '(0.06 0.06 0.1) :mass 0.1)
+    w))
+
+(defun x-of (object) (cl-transforms:x (cl-transforms:origin (btr:pose object))))
+
+(defparameter *arm-urdf*
+  "<robot name=\"arm\">
+     <link name=\"base\"><collision><geometry><box size=\"0.1 0.1 0.1\"/></geometry></collision></link>
+     <link name=\"hand\"><collision><geometry><box size=\"0.05 0.05 0.05\"/></geometry></collision></link>
+     <joint name=\"lift\" type=\"prismatic\"><parent link=\"base\"/><child link=\"hand\"/>
+       <origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/><axis xyz=\"0 0 1\"/>
+       <limit lower=\"-0.5\" upper=\"0.5\" velocity=\"1\" effort=\"10\"/></joint>
+   </robot>")
+
+(test btr-and-common-lisp-together
+  (is (eq 'cl:step (find-symbol "STEP" :btr)))
+  (let ((package (make-package (gensym "BTR-USER") :use '(:cl :btr))))
+    (unwind-protect (is (eq 'btr:object (find-symbol "OBJECT" package)))
+      (delete-package package)))
+  (small-world)
+  (let ((before (cl-transforms:z (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* 'cup))))))
+    (is (= 1 (length (force-ll (prolog '(and (btr:bullet-world ?w) (step ?w)))))))
+    (is (numberp before))))
+
+(test attach-object-with-lists-and-nil
+  (let* ((w (small-world))
+         (tray (btr:object w 'tray)) (cup (btr:object w 'cup)) (table (btr:object w 'table)))
+    (signals warning (btr:attach-object nil cup))
+    (is (null (handler-bind ((warning #'muffle-warning)) (btr:attach-object nil cup))))
+    (is (null (btr:attached-objects cup)))
+    (btr:attach-object (list tray table) cup)
+    (is (equal '(tray table) (mapcar #'first (btr:attached-objects cup))))
+    (is (equal '(cup) (mapcar #'first (btr:attached-objects tray))))
+    (is (equal '(cup) (mapcar #'first (btr:attached-objects table))))
+    (btr:detach-object tray cup)
+    (is (equal '(table) (mapcar #'first (btr:attached-objects cup))))
+    (btr:detach-all-objects table)
+    (is (null (btr:attached-objects cup)))
+    (is (equal '() (btr:attach-object tray '())) "an empty list of objects attaches nothing")))
+
+(test item-attachments-move-the-attached-item
+  (let* ((w (small-world))
+         (tray (btr:object w 'tray)) (cup (btr:object w 'cup)))
+    (btr:attach-object tray cup)
+    (is (equal '((cup nil)) (btr:attached-objects tray)))
+    (setf (btr:pose tray) (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.2 0 0.72)
+                                                   (cl-transforms:make-identity-rotation)))
+    (is (< (abs (- 0.2 (x-of cup))) 1d-6) "the cup follows the tray")
+    (btr:detach-object tray cup)
+    (setf (btr:pose tray) (cl-transforms:make-pose (cl-transforms:make-3d-vector -0.2 0 0.72)
+                                                   (cl-transforms:make-identity-rotation)))
+    (is (< (abs (- 0.2 (x-of cup))) 1d-6) "a detached cup stays")))
+
+(test current-world-macros-and-predicates
+  (let ((w (small-world)) (other (make-instance 'btr:bt-reasoning-world)))
+    (btr:with-current-bullet-world other
+      (is (eq other btr:*current-bullet-world*)))
+    (is (eq w btr:*current-bullet-world*))
+    (signals btr:btr-error (btr:with-current-bullet-world 42 t))
+    (is (eq w (var-value 'btr:?w (first (btr:prolog-?w '(btr:object btr:?w cup))))))
+    (is (eq w (var-value '?w (first (btr:prolog-?w '(btr:object ?w tray))))) "?W of any package")
+    (is (null (btr:prolog-?w '(btr:object ?w no-such-object))))
+    (let ((fresh (var-value '?new (first (prolog '(btr:clear-bullet-world ?new))))))
+      (is (typep fresh 'btr:bt-reasoning-world))
+      (is (null (btr:object-names fresh)))
+      (is (eq w btr:*current-bullet-world*)))
+    (force-ll (prolog '(btr:clear-bullet-world)))
+    (is (not (eq w btr:*current-bullet-world*)))
+    (is (null (btr:object-names btr:*current-bullet-world*)))))
+
+(test obj-pose-on-puts-the-bottom-on-the-pose
+  (let* ((w (small-world)) (cup (btr:object w 'cup))
+         (target (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.3 0.1 0.7)
+                                          (cl-transforms:make-identity-rotation)))
+         (pose (btr:obj-pose-on target cup)))
+    (setf (btr:pose cup) pose)
+    (multiple-value-bind (lo hi) (btr:aabb cup)
+      (is (< (abs (- 0.7 (cl-transforms:z lo))) 1d-6))
+      (is (< (abs (- 0.3 (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))) 1d-6)))
+    (signals btr:btr-error (btr:obj-pose-on target 'cup))))
+
+(test bounding-boxes-of-objects
+  (let* ((w (small-world)) (cup (btr:object w 'cup)) (tray (btr:object w 'tray)))
+    (let ((d (cl-bullet:bounding-box-dimensions cup))
+          (c (cl-bullet:bounding-box-center cup)))
+      (is (< (abs (- 0.1 (cl-transforms:z d))) 1d-3))
+      (is (< (abs (- 0.79 (cl-transforms:z c))) 1d-3)))
+    (is (cl-transforms:v= (btr:calculate-bb-dims cup) (cl-bullet:bounding-box-dimensions cup)))
+    (let ((merged (btr:merge-bounding-boxes cup tray)))
+      (is (cl-bullet:bounding-box-p merged))
+      (is (< (abs (- 0.3 (cl-transforms:x (cl-bullet:bounding-box-dimensions merged)))) 1d-3))
+      (is (< (abs (- 0.14 (cl-transforms:z (cl-bullet:bounding-box-dimensions merged)))) 2d-3)))
+    (signals error (cl-bullet:bounding-box-center 42))))
+
+(test robot-attached-objects-in-collision
+  (let* ((w (small-world))
+         (arm (btr:add-object w :urdf 'arm '((2 0 0.05) (0 0 0 1)) :urdf *arm-urdf*))
+         (cup (btr:object w 'cup)))
+    (setf (btr:pose cup) (cl-transforms:make-pose (cl-transforms:make-3d-vector 2 0 0.35)
+                                                  (cl-transforms:make-identity-rotation)))
+    (btr:attach-object arm cup :link "hand")
+    (is-false (btr:robot-attached-objects-in-collision w arm))
+    (btr:add-object w :box 'wall '((2 0 0.39) (0 0 0 1)) :size '(0.02 0.5 0.02))
+    (is-true (btr:robot-attached-objects-in-collision w arm))
+    (signals btr:btr-error (btr:robot-attached-objects-in-collision w cup))))
+
+(test timelines-record-world-states
+  (let* ((w (small-world)) (cup (btr:object w 'cup))
+         (timeline (btr:timeline-init w 0)))
+    (setf (btr:pose cup) (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.4 0 0.79)
+                                                  (cl-transforms:make-identity-rotation)))
+    (btr:timeline-advance timeline (btr:make-event w '(moved cup) 10))
+    (btr:timeline-advance timeline (btr:make-event w '(looked) 5))
+    (is (equal '(btr::start (looked) (moved cup))
+               (mapcar #'btr:event (btr:timeline-events timeline))) "ordered by time")
+    (flet ((cup-x-at (time)
+             (second (find 'cup (btr:timeline-lookup timeline time) :key #'first))))
+      (is (< (abs (cl-transforms:x (cl-transforms:origin (cup-x-at 3)))) 1d-6))
+      (is (< (abs (- 0.4 (cl-transforms:x (cl-transforms:origin (cup-x-at 12))))) 1d-6)))
+    (btr:with-timeline timeline
+      (is (equal '(0 5 10) (mapcar (lambda (b) (var-value '?t b))
+                                   (force-ll (prolog '(btr:occurs-in ?tl ?e ?t))))))
+      (is-true (prolog '(btr:holds-at ?tl (btr:contact ?w cup tray) 0)))
+      (is-false (prolog '(btr:holds-at ?tl (btr:contact ?w cup tray) 12)) "moved off the tray")
+      ;; the event at 5 was made after the move, so it holds the moved cup
+      (is (equal '(0) (mapcar (lambda (b) (var-value '?t b))
+                              (force-ll (prolog '(btr:holds-at ?tl (btr:contact ?w cup tray) ?t)))))))
+    (is (< (abs (- 0.4 (x-of cup))) 1d-6) "asking the past leaves the world as it is")
+    (signals btr:btr-error (btr:timeline-advance timeline 'not-an-event))
+    (signals btr:btr-error (btr:make-event w '(x) "noon"))))
+
+(test generate-urdf-string-round-trips
+  (let* ((robot (cl-urdf:parse-urdf *arm-urdf*))
+         (text (cl-urdf:generate-urdf-string robot))
+         (again (cl-urdf:parse-urdf text)))
+    (is (equal "arm" (cl-urdf:name again)))
+    (is (equal (cl-urdf:robot-link-names robot) (cl-urdf:robot-link-names again)))
+    (is (equal (cl-urdf:robot-joint-names robot) (cl-urdf:robot-joint-names again)))
+    (let ((j1 (gethash "lift" (cl-urdf:joints robot))) (j2 (gethash "lift" (cl-urdf:joints again))))
+      (is (eq :prismatic (cl-urdf:joint-type j2)))
+      (is (equal (cl-urdf:limits j1) (cl-urdf:limits j2)))
+      (is (every (lambda (a b) (< (abs (- a b)) 1d-12))
+                 (first (cl-urdf:origin j1)) (first (cl-urdf:origin j2))))
+      (is (equal "base" (cl-urdf:name (cl-urdf:parent j2)))))
+    (is (equal (cl-urdf:collision (gethash "hand" (cl-urdf:links robot)))
+               (cl-urdf:collision (gethash "hand" (cl-urdf:links again)))))
+    (signals cl-urdf:urdf-error (cl-urdf:generate-urdf-string "not a robot"))))
+
+(test generate-urdf-string-of-the-pr2
+  (let* ((path (asdf:system-relative-pathname "cram-plans/cram-pr2-description" "robots/pr2/pr2.urdf"))
+         (robot (cl-urdf:parse-urdf path))
+         (again (cl-urdf:parse-urdf (cl-urdf:generate-urdf-string robot))))
+    (is (= (hash-table-count (cl-urdf:links robot)) (hash-table-count (cl-urdf:links again))))
+    (is (= (hash-table-count (cl-urdf:joints robot)) (hash-table-count (cl-urdf:joints again))))
+    (is (equal (cl-urdf:name (cl-urdf:root-link robot)) (cl-urdf:name (cl-urdf:root-link again))))))

@@ -1,0 +1,57 @@
+;;;; Tests of the viewer's /report endpoint (the page's test hook): it keeps a bounded number
+;;;; of bounded texts, so no local process can grow the image through it.
+
+(defpackage :cram-viewer-report-tests
+  (:use :cl :fiveam))
+
+(in-package :cram-viewer-report-tests)
+
+(def-suite viewer-report :in cram-plans-tests:all
+  :description "The viewer's /report endpoint is bounded.")
+(in-suite viewer-report)
+
+(defun post (url path body)
+  "POST BODY (a string) to PATH of the server at URL; return the HTTP status code."
+  (let* ((start (+ (search "//" url) 2))
+         (colon (position #\: url :start start))
+         (port (parse-integer url :start (1+ colon) :junk-allowed t))
+         (socket (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
+    (sb-bsd-sockets:socket-connect socket #(127 0 0 1) port)
+    (unwind-protect
+         (let ((stream (sb-bsd-sockets:socket-make-stream socket :input t :output t
+                                                                 :external-format :latin-1
+                                                                 :buffering :full)))
+           (format stream "POST ~a HTTP/1.0~c~cHost: 127.0.0.1~c~cContent-Type: application/json~c~c~
+                           Content-Length: ~d~c~c~c~c~a"
+                   path #\Return #\Newline #\Return #\Newline #\Return #\Newline
+                   (length body) #\Return #\Newline #\Return #\Newline body)
+           (finish-output stream)
+           (let ((status-line (read-line stream nil "")))
+             (parse-integer status-line :start (1+ (position #\Space status-line)) :junk-allowed t)))
+      (sb-bsd-sockets:socket-close socket))))
+
+(test report-keeps-only-the-newest-few
+  (let ((url (cram-viewer:viewer :port 0 :stream nil)))
+    (unwind-protect
+         (progn
+           (setf cram-viewer::*reports* '())
+           (dotimes (i (+ 3 cram-viewer::*max-reports*))
+             (is (= 200 (post url "/report" (format nil "{\"n\": ~d}" i)))))
+           (is (= cram-viewer::*max-reports* (length cram-viewer::*reports*)))
+           (is (string= (format nil "{\"n\": ~d}" (+ 2 cram-viewer::*max-reports*))
+                        (first cram-viewer::*reports*))
+               "the newest first")
+           ;; a body larger than the limit is refused, and not kept
+           ;; (the server's threads see the global value: set it, then put it back)
+           (let ((before (copy-list cram-viewer::*reports*))
+                 (limit cram-viewer::*max-report-bytes*))
+             (unwind-protect
+                  (progn
+                    (setf cram-viewer::*max-report-bytes* 100)
+                    (is (= 413 (post url "/report" (make-string 200 :initial-element #\x))))
+                    (is (equal before cram-viewer::*reports*))
+                    (is (= 200 (post url "/report" (make-string 100 :initial-element #\y))))
+                    (is (= 100 (length (first cram-viewer::*reports*)))))
+               (setf cram-viewer::*max-report-bytes* limit))))
+      (cram-viewer:stop-viewer)
+      (setf cram-viewer::*reports* '()))))
