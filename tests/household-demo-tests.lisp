@@ -91,7 +91,7 @@
       (is (< (abs (kitchen-joint joint)) 0.1) "~a is still open: ~a" joint (kitchen-joint joint)))
     ;; bowl, cup and spoon in the dishwasher tray's region, cereal back on the oven board, milk
     ;; in the trash drawer
-    (let ((tray (btr:link-pose (btr:get-environment-object) "sink_area_dish_washer_tray_main")))
+    (let ((tray (btr:link-pose (btr:get-environment-object) "sink_area_dish_washer_tray_bottom")))
       (dolist (type '(:bowl :cup :spoon))
         (is (< (cl-transforms:v-dist (object-position type) (cl-transforms:origin tray)) 0.45)
             "~s is not in the dishwasher: ~a" type (object-position type))))

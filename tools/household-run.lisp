@@ -18,9 +18,9 @@ x and y, drawn from STATE."
   (cl-transforms:origin (btr:link-pose (btr:get-environment-object) link)))
 
 (defparameter *household-end-places*
-  '((:bowl "sink_area_dish_washer_tray_main" 0.45d0)
-    (:cup "sink_area_dish_washer_tray_main" 0.45d0)
-    (:spoon "sink_area_dish_washer_tray_main" 0.45d0)
+  '((:bowl "sink_area_dish_washer_tray_bottom" 0.45d0)
+    (:cup "sink_area_dish_washer_tray_bottom" 0.45d0)
+    (:spoon "sink_area_dish_washer_tray_bottom" 0.45d0)
     (:breakfast-cereal "oven_area_area_right_drawer_board_3_link" 0.3d0)
     (:milk "sink_area_trash_drawer_main" 0.35d0))
   "(type link metres): where each object must end after cleaning, within that distance of the
