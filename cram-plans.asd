@@ -4,7 +4,8 @@
 ;; Debian's cxml.asd defines several primary systems in one file: ASDF 3.3 re-reads it, warns
 ;; and prints closure-common's character checks each time one of them is looked up.  Load cxml
 ;; once, quietly, and register it and its parts as immutable, so ASDF neither re-reads nor
-;; re-plans them (nor recompiles what depends on them).
+;; re-plans them (nor recompiles what depends on them).  (The end of this file keeps the load
+;; of cxml from counting as a dependency of this file's definitions.)
 (unless (asdf:component-loaded-p "cxml")
   (let ((*standard-output* (make-broadcast-stream)))
     (handler-bind ((warning #'muffle-warning))
@@ -12,6 +13,24 @@
   (dolist (name '("cxml" "cxml-xml" "cxml-dom" "cxml-klacks" "closure-common"))
     (when (asdf:find-system name nil)
       (asdf:register-immutable-system name))))
+
+;; Debian's hunchentoot.asd and flexi-streams.asd also define test systems of other names, and
+;; ASDF warns each time it reads them (the viewer, part of `cram-plans', loads hunchentoot).
+;; Read them once, quietly.
+(dolist (name '("flexi-streams" "hunchentoot"))
+  (unless (asdf:registered-system name)
+    (let ((file (nth-value 2 (asdf:locate-system name))))
+      (when file
+        (handler-bind ((warning #'muffle-warning))
+          (asdf:load-asd file :name name))))))
+
+;; The compiler's optimization notes on this project's files are for its developers, not for a
+;; user's first build: compiling a cram-plans system muffles them (warnings still show).
+(defmethod asdf:perform :around ((operation asdf:compile-op) (component asdf:cl-source-file))
+  (if (uiop:string-prefix-p "cram-plans" (asdf:component-name (asdf:component-system component)))
+      (handler-bind ((sb-ext:compiler-note #'muffle-warning))
+        (call-next-method))
+      (call-next-method)))
 
 ;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
 ;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
@@ -39,7 +58,9 @@
 (unless (member 'cram-plans-find-ros-system asdf:*system-definition-search-functions*)
   (setf asdf:*system-definition-search-functions*
         (append asdf:*system-definition-search-functions* '(cram-plans-find-ros-system))))
-(when (asdf:find-system "roslisp" nil)
+;; (Asked of the search function, not of FIND-SYSTEM: a system looked up while this file loads
+;; becomes a dependency of its definitions.)
+(when (or (cram-plans-find-ros-system "roslisp") (asdf:registered-system "roslisp"))
   (pushnew :cram-plans-roslisp *features*))
 
 (defsystem "cram-plans/cram-utilities"
@@ -242,7 +263,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
                "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
-               "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
+               "cram-plans/compat" "cram-plans/replay" "cram-plans/viewer" "cram-plans/cram-ros-pms/package"
                (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
 
 (defsystem "cram-plans/cram-ros-pms/package"
@@ -557,3 +578,13 @@ bottles."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
   :components ((:file "plans-tests") (:file "plans-placing-tests")))
+
+;;; Loading cxml and reading hunchentoot.asd at the top of this file made ASDF record them as
+;;; dependencies of this file's definitions; outside a LOAD-SYSTEM an immutable system counts as
+;;; not done, so the next FIND-SYSTEM (e.g. SYSTEM-RELATIVE-PATHNAME) would read this file again
+;;; and redefine, and so reload, every system in it.  Nothing in this file depends on them.
+(let ((system (asdf:registered-system "cram-plans")))
+  (when system
+    (setf (asdf/system:definition-dependency-list system) '())
+    (let ((set (asdf/system:definition-dependency-set system)))
+      (when (hash-table-p set) (clrhash set)))))
