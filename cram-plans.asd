@@ -26,11 +26,16 @@
 
 ;; The compiler's optimization notes on this project's files are for its developers, not for a
 ;; user's first build: compiling a cram-plans system muffles them (warnings still show).
-(defmethod asdf:perform :around ((operation asdf:compile-op) (component asdf:cl-source-file))
+(defun cram-plans-compile-quietly (thunk component)
+  "Call THUNK (compiling COMPONENT), muffling compiler notes when COMPONENT is of cram-plans."
   (if (uiop:string-prefix-p "cram-plans" (asdf:component-name (asdf:component-system component)))
       (handler-bind ((sb-ext:compiler-note #'muffle-warning))
-        (call-next-method))
-      (call-next-method)))
+        (funcall thunk))
+      (funcall thunk)))
+(unless (find-method #'asdf:perform '(:around)
+                     (list (find-class 'asdf:compile-op) (find-class 'asdf:cl-source-file)) nil)
+  (defmethod asdf:perform :around ((operation asdf:compile-op) (component asdf:cl-source-file))
+    (cram-plans-compile-quietly #'call-next-method component)))
 
 ;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
 ;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
@@ -122,6 +127,8 @@
   :components ((:file "package")
                (:file "logging")
                (:file "conditions")
+               (:file "debugging")
+               (:file "implementation-package")
                (:file "task-tree")
                (:file "tasks")
                (:file "failures")

@@ -40,7 +40,8 @@
    #:process-module-running-p #:pm-execute #:pm-execute-matching
    #:matching-process-modules #:matching-process-module #:available-process-module
    #:process-module-error #:process-module-error-name
-   #:no-matching-process-module #:no-matching-process-module-designator))
+   #:no-matching-process-module #:no-matching-process-module-designator
+   #:*process-module-debugger-hook* #:continue-pm))
 
 (defpackage :cram-projection
   (:nicknames :proj)

@@ -61,6 +61,8 @@ outside a task, is raised with ERROR. Never returns."
   (let ((condition (coerce-to-failure arguments)))
     (if (and *current-task* (typep condition 'plan-failure))
         (progn
+          (when (break-on-failure-p condition)
+            (debug-in-task condition "Signal the plan failure (failure handling may catch it)."))
           (signal condition)
           ;; Every task thread handles PLAN-FAILURE at its root, so SIGNAL
           ;; only returns if a handler declined and no root handler exists.
