@@ -25,17 +25,12 @@
           (asdf:load-asd file :name name))))))
 
 ;; The compiler's optimization notes on this project's files are for its developers, not for a
-;; user's first build: compiling a cram-plans system muffles them (warnings still show).
-(defun cram-plans-compile-quietly (thunk component)
-  "Call THUNK (compiling COMPONENT), muffling compiler notes when COMPONENT is of cram-plans."
-  (if (uiop:string-prefix-p "cram-plans" (asdf:component-name (asdf:component-system component)))
-      (handler-bind ((sb-ext:compiler-note #'muffle-warning))
-        (funcall thunk))
-      (funcall thunk)))
-(unless (find-method #'asdf:perform '(:around)
-                     (list (find-class 'asdf:compile-op) (find-class 'asdf:cl-source-file)) nil)
-  (defmethod asdf:perform :around ((operation asdf:compile-op) (component asdf:cl-source-file))
-    (cram-plans-compile-quietly #'call-next-method component)))
+;; user's first build: every system of this file compiles its files through this function (set
+;; at the end of the file; warnings still show).
+(defun cram-plans-compile-quietly (thunk)
+  "Call THUNK, a compilation, muffling the compiler's optimization notes."
+  (handler-bind ((sb-ext:compiler-note #'muffle-warning))
+    (funcall thunk)))
 
 ;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
 ;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
@@ -501,7 +496,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
-               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"))
+               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
+               "cram-plans/tests/repl"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -509,6 +505,15 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "sb-posix")
   :pathname "tests/"
   :components ((:file "robot-ros-tests")))
+
+(defsystem "cram-plans/tests/repl"
+  :description "A user's day at the REPL: a swank server and a client speaking SLIME's protocol,
+reloads, the debugger inside plans, logging."
+  :depends-on ("cram-plans/tests/base" "cram-plans" "sb-posix" "sb-bsd-sockets")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "swank-client")
+               (:file "repl-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."
@@ -585,6 +590,12 @@ bottles."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
   :components ((:file "plans-tests") (:file "plans-placing-tests")))
+
+;;; Every system of this file compiles through CRAM-PLANS-COMPILE-QUIETLY.
+(dolist (name (asdf:registered-systems))
+  (when (or (string= name "cram-plans") (uiop:string-prefix-p "cram-plans/" name))
+    (reinitialize-instance (asdf:registered-system name)
+                           :around-compile 'cram-plans-compile-quietly)))
 
 ;;; Loading cxml and reading hunchentoot.asd at the top of this file made ASDF record them as
 ;;; dependencies of this file's definitions; outside a LOAD-SYSTEM an immutable system counts as

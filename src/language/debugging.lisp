@@ -37,11 +37,11 @@ ABORT-PLAN."))
              (error "CPL:*BREAK-ON-PLAN-FAILURES* is ~s: expected a type specifier such as T, ~
                      NIL or COMMON-FAIL:MANIPULATION-LOW-LEVEL-FAILURE." spec))))))
 
-(defun debug-in-task (condition continue-report)
-  "Enter the debugger for CONDITION in the current task's thread, at the signalling frame.
-Returns when the user picks CONTINUE (described by CONTINUE-REPORT); the restart ABORT-PLAN
-stops the plan and unwinds this task."
-  (let ((task *current-task*))
+(defun debug-in-task (task condition continue-report)
+  "Enter the debugger for CONDITION in the thread of TASK (the current task), at the signalling
+frame. Returns when the user picks CONTINUE (described by CONTINUE-REPORT); the restart
+ABORT-PLAN stops the plan and unwinds this task."
+  (progn
     (restart-case (with-simple-restart (continue "~a" continue-report)
                     (invoke-debugger condition))
       (abort-plan ()

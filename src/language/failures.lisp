@@ -62,7 +62,7 @@ outside a task, is raised with ERROR. Never returns."
     (if (and *current-task* (typep condition 'plan-failure))
         (progn
           (when (break-on-failure-p condition)
-            (debug-in-task condition "Signal the plan failure (failure handling may catch it)."))
+            (debug-in-task *current-task* condition "Signal the plan failure (failure handling may catch it)."))
           (signal condition)
           ;; Every task thread handles PLAN-FAILURE at its root, so SIGNAL
           ;; only returns if a handler declined and no root handler exists.

@@ -127,7 +127,7 @@ TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
                          (error
                            (lambda (c)
                              (when (and *debug-on-lisp-errors* (not (typep c 'task-exit-error)))
-                               (debug-in-task c "Let the error end the task as a plan failure."))
+                               (debug-in-task task c "Let the error end the task as a plan failure."))
                              (when (typep c 'control-error)
                                ;; a THROW to a tag no frame of this thread established
                                (setf c (make-condition 'task-exit-error
