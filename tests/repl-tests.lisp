@@ -86,7 +86,7 @@
            (let ((id (send-rex connection
                                (format nil "(swank-repl:listener-eval ~s)"
                                        (format nil "(loop repeat 3000 do (btw-tut:move-bottle))~%"))
-                               :thread :repl-thread)))
+                               :package (conn-package connection) :thread :repl-thread)))
              (pump connection (constantly nil) 4)
              (is (> (length (log-lines (take-output connection))) 50) "the loop logs")
              (let* ((start (get-internal-real-time))

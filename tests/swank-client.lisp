@@ -78,7 +78,7 @@
 
 (defstruct (swank-connection (:conc-name conn-))
   socket stream (next-id 0) (messages '()) (output (make-string-output-stream))
-  (message-delay 0))
+  (message-delay 0) (package "COMMON-LISP-USER"))
 
 (defun open-swank-socket (port)
   (let ((socket (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
@@ -126,6 +126,9 @@ output message stand for the time Emacs takes to insert it into the REPL buffer.
              (write-string (second message) (conn-output connection))
              (when (plusp (conn-message-delay connection))
                (sleep (conn-message-delay connection))))
+            ((wire-symbol-p kind "NEW-PACKAGE")
+             ;; the REPL's package changed (IN-PACKAGE): later evaluations are read in it
+             (setf (conn-package connection) (second message)))
             ((wire-symbol-p kind "PING")
              (send-message connection (format nil "(:emacs-pong ~s ~s)"
                                               (second message) (third message))))))))
@@ -199,5 +202,5 @@ or a thread id), as Emacs's :emacs-rex; returns its request id."
 (defun repl-eval (connection text &key (seconds 300))
   "Type TEXT into CONNECTION's REPL and wait until it is evaluated; returns (status output)."
   (let ((result (rex connection (format nil "(swank-repl:listener-eval ~s)" (format nil "~a~%" text))
-                     :thread :repl-thread :seconds seconds)))
+                     :package (conn-package connection) :thread :repl-thread :seconds seconds)))
     (list (first result) (take-output connection))))
