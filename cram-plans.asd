@@ -513,7 +513,8 @@ reloads, the debugger inside plans, logging."
   :pathname "tests/"
   :serial t
   :components ((:file "swank-client")
-               (:file "repl-tests")))
+               (:file "repl-tests")
+               (:file "repl-debugger-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."

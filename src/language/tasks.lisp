@@ -10,7 +10,7 @@
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
     *log-stream* *log-tags* *log-level* *sleep-function*
-    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook*)
+    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
