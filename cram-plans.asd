@@ -288,6 +288,8 @@ belief state following /joint_states and TF."
   :serial t
   :components ((:file "connection")
                (:file "actionlib")
+               (:file "actionlib-api")
+               (:file "actionlib-simple-client")
                (:file "robot")
                (:file "motions")
                (:file "process-modules")
@@ -497,7 +499,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/repl"))
+               "cram-plans/tests/repl" "cram-plans/tests/actionlib"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -515,6 +517,13 @@ reloads, the debugger inside plans, logging."
   :components ((:file "swank-client")
                (:file "repl-tests")
                (:file "repl-debugger-tests")))
+
+(defsystem "cram-plans/tests/actionlib"
+  :description "CRAM's actionlib client and the example gripper process module against a rospy
+action server on a private ROS master."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-ros-pms" "actionlib-msg")
+  :pathname "tests/"
+  :components ((:file "actionlib-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."

@@ -48,18 +48,6 @@ ABORT-PLAN stops the plan and unwinds this task."
         :report "Abort the plan: stop every task of it; its top-level call signals PLAN-ABORTED."
         (stop-plan-from-task task)))))
 
-(defun stop-plan-from-task (task)
-  "Stop the plan TASK belongs to: mark its root task aborted, evaporate the root, and unwind
-TASK's own thread."
-  (let ((root (loop for tk = task then (task-parent tk)
-                    while (task-parent tk)
-                    finally (return tk))))
-    (setf (task-aborted root) t)
-    (unless (eq root task)
-      (evaporate-task root))
-    (setf (task-evaporating task) t)
-    (throw task :evaporated)))
-
 (defun abort-plan (&optional condition)
   "Invoke the restart ABORT-PLAN (of the debugger inside a task, see *DEBUG-ON-LISP-ERRORS*):
 stop the whole plan, whose top-level call then signals PLAN-ABORTED. With CONDITION, the

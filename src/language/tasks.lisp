@@ -182,6 +182,18 @@ given node is used."
       (handler-case (bt:interrupt-thread thread (lambda () (evaporate-self task)))
         (error () nil)))))
 
+(defun stop-plan-from-task (task)
+  "Stop the plan TASK belongs to: mark its root task aborted, evaporate the root, and unwind
+TASK's own thread."
+  (let ((root (loop for tk = task then (task-parent tk)
+                    while (task-parent tk)
+                    finally (return tk))))
+    (setf (task-aborted root) t)
+    (unless (eq root task)
+      (evaporate-task root))
+    (setf (task-evaporating task) t)
+    (throw task :evaporated)))
+
 (defun evaporate-and-join (group)
   "Evaporate every unfinished task of GROUP and wait for all their threads."
   (sb-sys:without-interrupts
