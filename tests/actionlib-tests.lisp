@@ -16,20 +16,19 @@
   (namestring (merge-pathnames name (asdf:system-source-directory "cram-plans/tests/base"))))
 
 (defun call-with-gripper-server (thunk)
-  "A private master, the gripper's action server and a node of this process around THUNK."
+  "A private master, the gripper's action server and a node of this process around THUNK (a
+node left running by an earlier test is stopped first: it talks to another master)."
+  (roslisp-utilities:shutdown-ros)
   (cram-ros-pms::start-private-ros)
-  (let ((own-node nil))
-    (unwind-protect
-         (progn
-           (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
-                                      (checkout-file "tools/ros/gripper_action_server.py"))
-           (unless (eq roslisp::*node-status* :running)
-             (roslisp:start-ros-node "actionlib_test" :anonymous t)
-             (setf own-node t))
-           (funcall thunk))
-      (actionlib-client:destroy-simple-action-clients)
-      (when own-node (ignore-errors (roslisp-utilities:shutdown-ros)))
-      (cram-ros-pms::stop-private-ros))))
+  (unwind-protect
+       (progn
+         (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
+                                    (checkout-file "tools/ros/gripper_action_server.py"))
+         (roslisp:start-ros-node "actionlib_test" :anonymous t)
+         (funcall thunk))
+    (actionlib-client:destroy-simple-action-clients)
+    (ignore-errors (roslisp-utilities:shutdown-ros))
+    (cram-ros-pms::stop-private-ros)))
 
 (defun goal (client mm)
   (actionlib:make-action-goal client goal mm))

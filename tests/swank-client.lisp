@@ -17,14 +17,6 @@
 (defun checkout-directory ()
   (namestring (asdf:system-source-directory "cram-plans/tests/base")))
 
-(defun free-tcp-port ()
-  "A TCP port on 127.0.0.1 that nothing listens on now."
-  (let ((socket (make-instance 'sb-bsd-sockets:inet-socket :type :stream :protocol :tcp)))
-    (unwind-protect
-         (progn (sb-bsd-sockets:socket-bind socket #(127 0 0 1) 0)
-                (nth-value 1 (sb-bsd-sockets:socket-name socket)))
-      (sb-bsd-sockets:socket-close socket))))
-
 (defun wait-for (seconds predicate &optional (step 0.05))
   "Call PREDICATE every STEP seconds until it returns true (its value) or SECONDS pass (NIL)."
   (loop with end = (+ (get-internal-real-time) (* seconds internal-time-units-per-second))
@@ -41,7 +33,7 @@
 (defun start-swank-server ()
   "Start a child SBCL in the checkout that loads Debian's swank and serves it on a free port
 \(the communication style :SPAWN, connections may come and go). Waits until it listens."
-  (let* ((port (free-tcp-port))
+  (let* ((port (roslisp-utilities:free-local-port))
          (log (format nil "/tmp/cram-plans-swank-~d-~d.log" (sb-posix:getpid) port))
          (process (sb-ext:run-program
                    "sbcl" (list "--noinform" "--no-userinit" "--no-sysinit"
