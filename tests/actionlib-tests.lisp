@@ -98,3 +98,17 @@ node left running by an earlier test is stopped first: it talks to another maste
          (signals common-fail:gripper-goal-not-reached (perform-opening 0.5))
          (is (eql 3 (- (roslisp:get-param "/my_gripper/goals") goals-before))
              "the example's process module did not send its three goals"))))))
+
+(defun documented-p (symbol)
+  (some (lambda (kind) (ignore-errors (documentation symbol kind)))
+        '(function variable type structure)))
+
+(test actionlib-packages-are-documented
+  (dolist (package '(:actionlib :actionlib-client))
+    (is (documentation (find-package package) t))
+    (do-external-symbols (symbol package)
+      (is (documented-p symbol) "~s has no docstring" symbol)))
+  (dolist (symbol '(cpl:*debug-on-lisp-errors* cpl:*break-on-plan-failures* cpl:abort-plan
+                    cpl:plan-aborted cpl:plan-aborted-name
+                    cpm:*process-module-debugger-hook* cpm:continue-pm))
+    (is (documented-p symbol) "~s has no docstring" symbol)))

@@ -40,7 +40,9 @@
                                 "--eval" "(require :asdf)"
                                 "--eval" "(asdf:load-system \"swank\")"
                                 "--eval" (format nil "(swank:create-server :port ~d :dont-close t)" port)
-                                "--eval" "(loop (sleep 10))")
+                                ;; ends itself when this process is gone
+                                "--eval" (format nil "(loop (sleep 2) (unless (probe-file \"/proc/~d/\") (sb-ext:exit :abort t)))"
+                                                 (sb-posix:getpid)))
                    :search t :wait nil :directory (checkout-directory)
                    :environment (remove-if (lambda (e) (uiop:string-prefix-p "CL_SOURCE_REGISTRY=" e))
                                            (sb-ext:posix-environ))
