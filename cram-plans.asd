@@ -4,7 +4,8 @@
 ;; Debian's cxml.asd defines several primary systems in one file: ASDF 3.3 re-reads it, warns
 ;; and prints closure-common's character checks each time one of them is looked up.  Load cxml
 ;; once, quietly, and register it and its parts as immutable, so ASDF neither re-reads nor
-;; re-plans them (nor recompiles what depends on them).
+;; re-plans them (nor recompiles what depends on them).  (The end of this file keeps the load
+;; of cxml from counting as a dependency of this file's definitions.)
 (unless (asdf:component-loaded-p "cxml")
   (let ((*standard-output* (make-broadcast-stream)))
     (handler-bind ((warning #'muffle-warning))
@@ -12,6 +13,24 @@
   (dolist (name '("cxml" "cxml-xml" "cxml-dom" "cxml-klacks" "closure-common"))
     (when (asdf:find-system name nil)
       (asdf:register-immutable-system name))))
+
+;; Debian's hunchentoot.asd and flexi-streams.asd also define test systems of other names, and
+;; ASDF warns each time it reads them (the viewer, part of `cram-plans', loads hunchentoot).
+;; Read them once, quietly.
+(dolist (name '("flexi-streams" "hunchentoot"))
+  (unless (asdf:registered-system name)
+    (let ((file (nth-value 2 (asdf:locate-system name))))
+      (when file
+        (handler-bind ((warning #'muffle-warning))
+          (asdf:load-asd file :name name))))))
+
+;; The compiler's optimization notes on this project's files are for its developers, not for a
+;; user's first build: every system of this file compiles its files through this function (set
+;; at the end of the file; warnings still show).
+(defun cram-plans-compile-quietly (thunk)
+  "Call THUNK, a compilation, muffling the compiler's optimization notes."
+  (handler-bind ((sb-ext:compiler-note #'muffle-warning))
+    (funcall thunk)))
 
 ;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
 ;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
@@ -39,7 +58,9 @@
 (unless (member 'cram-plans-find-ros-system asdf:*system-definition-search-functions*)
   (setf asdf:*system-definition-search-functions*
         (append asdf:*system-definition-search-functions* '(cram-plans-find-ros-system))))
-(when (asdf:find-system "roslisp" nil)
+;; (Asked of the search function, not of FIND-SYSTEM: a system looked up while this file loads
+;; becomes a dependency of its definitions.)
+(when (or (cram-plans-find-ros-system "roslisp") (asdf:registered-system "roslisp"))
   (pushnew :cram-plans-roslisp *features*))
 
 (defsystem "cram-plans/cram-utilities"
@@ -120,6 +141,8 @@ points in polygons (package CRAM-MATH, CMA)."
   :components ((:file "package")
                (:file "logging")
                (:file "conditions")
+               (:file "debugging")
+               (:file "implementation-package")
                (:file "task-tree")
                (:file "tasks")
                (:file "failures")
@@ -278,7 +301,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-urdf-environment-manipulation"
                "cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-projection-demos"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
-               "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
+               "cram-plans/compat" "cram-plans/replay" "cram-plans/viewer" "cram-plans/cram-ros-pms/package"
                (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")
                (:feature :cram-plans-roslisp "cram-plans/cram-urdf-environment-manipulation/ros")))
 
@@ -302,6 +325,8 @@ belief state following /joint_states and TF."
   :serial t
   :components ((:file "connection")
                (:file "actionlib")
+               (:file "actionlib-api")
+               (:file "actionlib-simple-client")
                (:file "robot")
                (:file "motions")
                (:file "process-modules")
@@ -535,7 +560,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
                "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"
                "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"
-               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"))
+               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"
+               "cram-plans/tests/repl" "cram-plans/tests/actionlib"))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -543,6 +569,23 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "sb-posix")
   :pathname "tests/"
   :components ((:file "robot-ros-tests")))
+
+(defsystem "cram-plans/tests/repl"
+  :description "A user's day at the REPL: a swank server and a client speaking SLIME's protocol,
+reloads, the debugger inside plans, logging."
+  :depends-on ("cram-plans/tests/base" "cram-plans" "sb-posix" "sb-bsd-sockets")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "swank-client")
+               (:file "repl-tests")
+               (:file "repl-debugger-tests")))
+
+(defsystem "cram-plans/tests/actionlib"
+  :description "CRAM's actionlib client and the example gripper process module against a rospy
+action server on a private ROS master."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-ros-pms" "actionlib-msg")
+  :pathname "tests/"
+  :components ((:file "actionlib-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."
@@ -735,3 +778,19 @@ attachments and the plans of opening, closing, accessing and sealing."
                "cram-plans/cram-urdf-environment-manipulation/ros")
   :pathname "tests/"
   :components ((:file "environment-manipulation-ros-tests")))
+
+;;; Every system of this file compiles through CRAM-PLANS-COMPILE-QUIETLY.
+(dolist (name (asdf:registered-systems))
+  (when (or (string= name "cram-plans") (uiop:string-prefix-p "cram-plans/" name))
+    (reinitialize-instance (asdf:registered-system name)
+                           :around-compile 'cram-plans-compile-quietly)))
+
+;;; Loading cxml and reading hunchentoot.asd at the top of this file made ASDF record them as
+;;; dependencies of this file's definitions; outside a LOAD-SYSTEM an immutable system counts as
+;;; not done, so the next FIND-SYSTEM (e.g. SYSTEM-RELATIVE-PATHNAME) would read this file again
+;;; and redefine, and so reload, every system in it.  Nothing in this file depends on them.
+(let ((system (asdf:registered-system "cram-plans")))
+  (when system
+    (setf (asdf/system:definition-dependency-list system) '())
+    (let ((set (asdf/system:definition-dependency-set system)))
+      (when (hash-table-p set) (clrhash set)))))

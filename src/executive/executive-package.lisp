@@ -46,7 +46,8 @@
    ;; asynchronous process modules
    #:def-asynchronous-process-module #:asynchronous-process-module
    #:asynchronous-process-module-name #:on-input #:on-cancel #:on-run #:synchronization-fluent
-   #:finish-process-module #:fail-process-module #:monitor-process-module))
+   #:finish-process-module #:fail-process-module #:monitor-process-module
+   #:*process-module-debugger-hook* #:continue-pm))
 
 (defpackage :cram-projection
   (:nicknames :proj)

@@ -9,7 +9,8 @@
 (defvar *inherited-specials*
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
-    *log-stream* *log-tags* *log-level* *sleep-function*)
+    *log-stream* *log-tags* *log-level* *sleep-function*
+    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
@@ -35,7 +36,8 @@ projection environment's clock or the current designators.")
   (failure nil)
   (finish-order nil)
   (evaporate-requested nil)
-  (evaporating nil))
+  (evaporating nil)
+  (aborted nil))
 
 (setf (documentation 'task-name 'function) "The name of a task."
       (documentation 'task-status 'function)
@@ -126,6 +128,8 @@ TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
                              (return-from run)))
                          (error
                            (lambda (c)
+                             (when (and *debug-on-lisp-errors* (not (typep c 'task-exit-error)))
+                               (debug-in-task task c "Let the error end the task as a plan failure."))
                              (when (typep c 'control-error)
                                ;; a THROW to a tag no frame of this thread established
                                (setf c (make-condition 'task-exit-error
@@ -179,6 +183,18 @@ given node is used."
       (setf (task-evaporate-requested task) t)
       (handler-case (bt:interrupt-thread thread (lambda () (evaporate-self task)))
         (error () nil)))))
+
+(defun stop-plan-from-task (task)
+  "Stop the plan TASK belongs to: mark its root task aborted, evaporate the root, and unwind
+TASK's own thread."
+  (let ((root (loop for tk = task then (task-parent tk)
+                    while (task-parent tk)
+                    finally (return tk))))
+    (setf (task-aborted root) t)
+    (unless (eq root task)
+      (evaporate-task root))
+    (setf (task-evaporating task) t)
+    (throw task :evaporated)))
 
 (defun evaporate-and-join (group)
   "Evaporate every unfinished task of GROUP and wait for all their threads."
@@ -248,11 +264,14 @@ signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
                            ((:failed :evaporated)
                             (return (list (task-status task) (task-failure task)))))
                          (sb-thread:condition-wait (task-group-condition group) lock)))))
-              (evaporate-and-join group))))
+              (evaporate-and-join group)
+              (ignore-errors (flush-log)))))
       (destructuring-bind (status payload) decision
         (ecase status
           (:succeeded (values-list payload))
           (:failed (if (typep payload 'common-lisp-error-envelope)
                        (error (envelop-error payload))
                        (error payload)))
-          (:evaporated (error "The top-level task ~s was evaporated." name)))))))
+          (:evaporated (if (task-aborted (first (task-group-tasks group)))
+                           (error 'plan-aborted :name name)
+                           (error "The top-level task ~s was evaporated." name))))))))
