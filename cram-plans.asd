@@ -90,6 +90,7 @@
                (:file "native-world")
                (:file "native-robot")
                (:file "native-query")
+               (:file "native-sweep")
                (:file "native-render")
                (:file "native-ik")))
 
@@ -223,6 +224,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :components ((:file "package")
                (:file "robot")
                (:file "tf")
+               (:file "sweep")
                (:file "low-level-base")
                (:file "ik")
                (:file "ik-solver")
@@ -473,7 +475,15 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/btr" "cram-plans/tests/scripts"
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
-               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"))
+               "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
+               "cram-plans/tests/sweep"))
+
+(defsystem "cram-plans/tests/sweep"
+  :description "Sweep checks between key poses: the shim's call and the motions' *SWEEP-CHECK*."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :components ((:file "sweep-tests")))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
