@@ -91,6 +91,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
   std::vector<const btCollisionObject *> candidates;
   std::vector<char> done;         // per candidate: reported, or left out (start contact)
+  std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
 };
 
 struct Hit {
@@ -299,6 +300,7 @@ struct Sweep {
                        }),
         m.candidates.end());
     m.done.assign(m.candidates.size(), 0);
+    m.clear_until.assign(m.candidates.size(), 0);
   }
 
   bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
@@ -324,18 +326,21 @@ struct Sweep {
     return c;
   }
 
-  // Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1.
+  // Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1. KNOWN: the
+  // distance at ta when already known to be in (0, path], else a negative number.
   double confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
-                 double tb, const btTransform &pb, btVector3 &point, int depth) {
+                 double tb, const btTransform &pb, btVector3 &point, int depth, double known = -1) {
     double h = tb - ta;
     double path = h * m.B;
     if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
-    Closest da = distance(m, pa, path + tol, other);
-    if (da.found && da.best <= 0) {
-      point = da.point;
-      return ta;
+    if (known < 0) {
+      Closest da = distance(m, pa, path + tol, other);
+      if (da.found && da.best <= 0) {
+        point = da.point;
+        return ta;
+      }
+      if (!da.found || da.best > path) return -1;
     }
-    if (!da.found || da.best > path) return -1;
     if (path <= tol || depth > 40) {
       Closest db = distance(m, pb, tol, other);
       if (db.found && db.best <= 0) {
@@ -392,62 +397,115 @@ struct Sweep {
     if (n_real > 1e5)
       fail(CN_E_ARG, "the move needs %.0f sub-steps of at most %s, more than 100000: raise the maximum step",
            n_real, num(max_step).c_str());
-    int n = std::max(1, (int)n_real);
-    std::vector<btTransform> prev(movers.size()), next(movers.size());
-    for (size_t i = 0; i < movers.size(); ++i) {
-      Mover &m = movers[i];
-      btTransform end = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
-      prev[i] = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
-      gather_candidates(m, prev[i], end);
+    levels = 0;
+    while ((double)(1 << levels) < n_real) ++levels;
+    n = 1 << levels;
+    for (Mover &m : movers) {
+      btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
+      btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
+      gather_candidates(m, a, b);
     }
-    for (int k = 0; k < n; ++k) {
-      double ta = (double)k / n, tb = (double)(k + 1) / n;
-      bool fk_done = false;
-      for (size_t i = 0; i < movers.size(); ++i) {
-        Mover &m = movers[i];
-        if (m.candidates.empty()) continue;
-        if (!fk_done && robot) {
-          fk(tb, base_at(tb));
-          fk_done = true;
+    pool.resize(levels + 2);
+    for (size_t i = 0; i < movers.size(); ++i) {
+      if (movers[i].candidates.empty()) continue;
+      std::vector<int> &all = pool[0];
+      all.clear();
+      for (size_t c = 0; c < movers[i].candidates.size(); ++c) all.push_back((int)c);
+      descend(i, 0, n, 0);
+    }
+  }
+
+  // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
+  int levels = 0, n = 1;
+  std::unordered_map<int, int> point_slot;   // sub-step point k -> its slot
+  std::vector<btTransform> slot_pose;        // per slot, one pose per mover
+  std::vector<btVector3> slot_lo, slot_hi;   // per slot, one box per mover
+  std::vector<std::vector<int>> pool;        // candidate lists per depth
+
+  // The slot of the movers' poses and boxes at time k / n (computed once).
+  int slot(int k) {
+    auto it = point_slot.find(k);
+    if (it != point_slot.end()) return it->second;
+    size_t nm = movers.size();
+    int sl = (int)point_slot.size();
+    point_slot.emplace(k, sl);
+    slot_pose.resize((sl + 1) * nm);
+    slot_lo.resize((sl + 1) * nm);
+    slot_hi.resize((sl + 1) * nm);
+    double t = (double)k / n;
+    if (robot) fk(t, base_at(t));
+    for (size_t i = 0; i < nm; ++i) {
+      const Mover &m = movers[i];
+      if (m.candidates.empty()) continue;
+      size_t at = sl * nm + i;
+      slot_pose[at] = pose_at(m, t, true);
+      m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+    }
+    return sl;
+  }
+
+  // Mover I over the sub-steps ka .. kb against the candidates pool[depth]: those whose boxes
+  // meet the interval's box (the end boxes grown by the chord bound, within the start box
+  // grown by the path bound) go down to halves, and at single sub-steps to the checks.
+  void descend(size_t i, int ka, int kb, int depth) {
+    Mover &m = movers[i];
+    size_t nm = movers.size();
+    size_t a = slot(ka) * nm + i, b = slot(kb) * nm + i;
+    double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
+    double grow = 3 * h * h * m.W * m.B / 8, path = h * m.B;
+    btVector3 lo = slot_lo[a], hi = slot_hi[a];
+    lo.setMin(slot_lo[b]);
+    hi.setMax(slot_hi[b]);
+    lo -= btVector3(grow, grow, grow);
+    hi += btVector3(grow, grow, grow);
+    lo.setMax(slot_lo[a] - btVector3(path, path, path));
+    hi.setMin(slot_hi[a] + btVector3(path, path, path));
+    std::vector<int> &keep = pool[depth + 1];
+    keep.clear();
+    for (int c : pool[depth]) {
+      if (m.done[c] || tb <= m.clear_until[c]) continue;
+      const btBroadphaseProxy *hp = m.candidates[c]->getBroadphaseHandle();
+      if (TestAabbAgainstAabb2(lo, hi, hp->m_aabbMin, hp->m_aabbMax)) keep.push_back(c);
+    }
+    if (keep.empty()) return;
+    if (kb - ka > 1) {
+      int km = (ka + kb) / 2;
+      descend(i, ka, km, depth + 1);
+      descend(i, km, kb, depth + 1);
+      return;
+    }
+    for (int c : keep) {
+      if (m.done[c] || tb <= m.clear_until[c]) continue;
+      const btCollisionObject *other = m.candidates[c];
+      double known = -1;
+      // conservative advancement: no point of the mover moves faster than B, so a pair
+      // apart by d at ta stays apart until ta + d / B
+      if (ta >= m.clear_until[c]) {
+        double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
+        Closest d0 = distance(m, slot_pose[a], probe_d, other);
+        double d = d0.found ? d0.best : probe_d;
+        if (ka == 0 && skip_start && d <= tol) {
+          m.done[c] = 1;
+          continue;
         }
-        next[i] = pose_at(m, tb, true);
-      }
-      for (size_t i = 0; i < movers.size(); ++i) {
-        Mover &m = movers[i];
-        if (m.candidates.empty()) continue;
-        double h = tb - ta;
-        double grow = 3 * h * h * m.W * m.B / 8;
-        btVector3 lo, hi, l2, h2;
-        m.co->getCollisionShape()->getAabb(prev[i], lo, hi);
-        m.co->getCollisionShape()->getAabb(next[i], l2, h2);
-        lo.setMin(l2);
-        hi.setMax(h2);
-        lo -= btVector3(grow, grow, grow);
-        hi += btVector3(grow, grow, grow);
-        for (size_t c = 0; c < m.candidates.size(); ++c) {
-          if (m.done[c]) continue;
-          const btCollisionObject *other = m.candidates[c];
-          const btBroadphaseProxy *hp = other->getBroadphaseHandle();
-          if (!TestAabbAgainstAabb2(lo, hi, hp->m_aabbMin, hp->m_aabbMax)) continue;
-          if (k == 0 && skip_start) {
-            Closest d0 = distance(m, prev[i], tol, other);
-            if (d0.found && d0.best <= tol) {
-              m.done[c] = 1;
-              continue;
-            }
-          }
-          btVector3 point;
-          double t = confirm(m, other, ta, prev[i], tb, next[i], point, 0);
-          if (t < 0) continue;
+        if (d <= 0) {  // touching at ta
           m.done[c] = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
-          hits.push_back({m.obj, m.link, ob, lb, t, point});
+          hits.push_back({m.obj, m.link, ob, lb, ta, d0.point});
+          continue;
         }
+        m.clear_until[c] = ta + d / m.B;
+        if (tb <= m.clear_until[c]) continue;
+        known = d;
       }
-      // confirm() may have moved the link poses: the next sub-step starts from these
-      for (size_t i = 0; i < movers.size(); ++i)
-        if (!movers[i].candidates.empty()) prev[i] = next[i];
+      btVector3 point;
+      double t = confirm(m, other, ta, slot_pose[a], tb, slot_pose[b], point, 0, known);
+      if (t < 0) continue;
+      m.done[c] = 1;
+      int ob, lb;
+      decode_rb(other, ob, lb);
+      hits.push_back({m.obj, m.link, ob, lb, t, point});
     }
   }
 };
