@@ -283,6 +283,7 @@ each motion, replays written to disk, and BTR:VIEWER / BTR:DEBUG-WINDOW, which l
   :components ((:file "package")
                (:file "scene")
                (:file "recorder")
+               (:file "sweeps")
                (:file "export")
                (:file "entry")
                (:static-file "viewer.js")
@@ -481,7 +482,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
 (defsystem "cram-plans/tests/sweep"
   :description "Sweep checks between key poses: the shim's call and the motions' *SWEEP-CHECK*."
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
-               "cram-plans/cram-bullet-world-tutorial")
+               "cram-plans/cram-bullet-world-tutorial" "cram-plans/replay")
   :pathname "tests/"
   :components ((:file "sweep-tests")))
 

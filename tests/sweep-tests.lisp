@@ -265,18 +265,32 @@ condition or :OK."
       (is (eq :ok outcome))
       (is (null sweeps) "sweeps: ~{~a~^; ~}" (mapcar #'urdf-proj:sweep-description sweeps)))))
 
-(test sweeps-in-the-task-tree
+(test sweeps-in-the-task-tree-and-the-replay
   (with-open-world ()
     (add-board)
     (setf urdf-proj:*sweep-check* :warn)
-    (let ((cpl:*log-stream* (make-broadcast-stream)))
+    (let ((cpl:*log-stream* (make-broadcast-stream))
+          (cram-viewer:*record-runs* t))
       (cpl:top-level
         (cpl:with-task-tree-node (:motion "moving-arm-joints")
           (urdf-proj:move-joints nil *right-out*))))
     (let ((nodes (cpl:find-task-tree-nodes (lambda (n) (eq :sweep (cpl:node-kind n))))))
       (is (= 1 (length nodes)))
       (is (search "board" (cpl:node-designator (first nodes))))
-      (is (search "sweep" (cpl:task-tree-to-json))))))
+      (is (search "\"sweep\"" (cpl:task-tree-to-json))))
+    ;; the replay's step of the motion holds the sweeps: path, first contact and fraction
+    (let* ((run (cram-viewer::last-run))
+           (step (aref (cram-viewer:run-steps run) (1- (length (cram-viewer:run-steps run)))))
+           (sweeps (remove-if-not (lambda (o) (equal "sweep" (gethash "type" o))) (cram-viewer::step-overlays step))))
+      (is (plusp (length sweeps)))
+      (dolist (o sweeps)
+        (is (= 17 (length (gethash "path" o))))
+        (is (= 3 (length (gethash "point" o))))
+        (is (< 0 (gethash "fraction" o) 1))
+        (is (search "board" (gethash "hit" o))))
+      (let ((json (cram-viewer::json-string (cram-viewer::run-json run))))
+        (is (search "\"type\":\"sweep\"" json))
+        (is (search "\"fraction\"" json))))))
 
 ;;; ---- a seeded corpus against dense ground truth -----------------------------------------------
 

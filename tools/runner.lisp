@@ -146,7 +146,8 @@ any yaw), drawn from SEED."
               (gethash "distance" record) (getf result :distance)
               (gethash "seconds" record) (getf result :seconds)
               (gethash "error" record) (let ((e (getf result :error)))
-                                         (and e (first-line e))))
+                                         (and e (first-line e)))
+              (gethash "sweeps" record) (getf result :sweeps 0))
         (loop for key in '(:look-direction :new-grasp :new-arm :grasp-failure :perception-failure)
               for name in *recovery-keys*
               do (setf (gethash name record) (getf result key)))
@@ -163,7 +164,8 @@ any yaw), drawn from SEED."
           (gethash "success" record) nil
           (gethash "distance" record) nil
           (gethash "seconds" record) 0
-          (gethash "error" record) message)
+          (gethash "error" record) message
+          (gethash "sweeps" record) 0)
     (dolist (key *recovery-keys*) (setf (gethash key record) 0))
     record))
 
@@ -503,6 +505,10 @@ success rate."
             (total (reduce #'+ records :key (lambda (r) (or (gethash key r) 0)))))
         (format stream "  ~20a ~5d / ~5d  ~a~%" key runs total
                 (make-string (if (zerop n) 0 (round (* 30 runs) n)) :initial-element #\#))))
+    (let ((swept (count-if (lambda (r) (plusp (or (gethash "sweeps" r) 0))) records))
+          (total (reduce #'+ records :key (lambda (r) (or (gethash "sweeps" r) 0)))))
+      (format stream "sweeps (motions whose path hits something): ~d in ~d runs, ~,2f per run~%"
+              total swept (if (zerop n) 0 (/ total n))))
     (format stream "failures:~%")
     (if (zerop (hash-table-count errors))
         (format stream "  none~%")

@@ -177,8 +177,9 @@ touching items, and its carried objects touching anything."
 
 (defun fill-sweep-paths (robot before after sweeps)
   "Set the path of each of SWEEPS: its moving frame at 16 steps from BEFORE to AFTER (robot
-states); ROBOT is left at AFTER."
-  (let* ((w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot))
+states); ROBOT is left where it is."
+  (let* ((now (robot-state-vectors robot))
+         (w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot))
          (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
          (n (length (cdr before)))
          (indices (let ((v (make-array n :element-type '(signed-byte 32)))) (dotimes (i n v) (setf (aref v i) i))))
@@ -197,17 +198,18 @@ states); ROBOT is left at AFTER."
                   (dolist (s sweeps)
                     (let ((p (moving-frame-point robot s)))
                       (push (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p)) (sweep-path s)))))
-      (restore-robot-state robot after))
+      (restore-robot-state robot now))
     (dolist (s sweeps) (setf (sweep-path s) (nreverse (sweep-path s))))
     sweeps))
 
-(defun robot-sweeps (before label kind &key (robot (robot-object)) ignore-links ignore-attached)
+(defun robot-sweeps (before label kind &key (robot (robot-object)) ignore-links ignore-attached
+                                            (after (robot-state-vectors robot)))
   "The SWEEPs of ROBOT's motion LABEL (of KIND) from the state BEFORE (ROBOT-STATE-VECTORS) to
-where it is now, leaving out the contacts it starts from, arrives at on purpose, those of
-IGNORE-LINKS (link names) and, with IGNORE-ATTACHED, of its carried objects, and
-*SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not move."
+AFTER (default: where it is now), leaving out the contacts it starts from, arrives at on
+purpose, those of IGNORE-LINKS (link names) and, with IGNORE-ATTACHED, of its carried objects,
+and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not move."
   (when *sweep-check*
-    (let ((after (robot-state-vectors robot)))
+    (progn
       (unless (same-state-p before after)
         (let* ((world (btr:world robot))
                (ignore (append (allowed-contact-records world robot)
@@ -246,12 +248,52 @@ signal MANIPULATION-POSE-UNREACHABLE naming the link or object, what it hits and
               (t (cpl:log-message :warn '(urdf-proj sweep) "~a" text)))))
     sweeps))
 
+(defun base-state (state x y yaw)
+  "STATE (ROBOT-STATE-VECTORS) with the base at X Y (its height kept), upright, turned to YAW."
+  (let ((b (copy-seq (car state))))
+    (setf (aref b 0) (float x 1d0) (aref b 1) (float y 1d0)
+          (aref b 3) 0d0 (aref b 4) 0d0 (aref b 5) (sin (/ yaw 2)) (aref b 6) (cos (/ yaw 2)))
+    (cons b (cdr state))))
+
+(defun wrap-angle (a) (atan (sin a) (cos a)))
+
+(defun state-yaw (state)
+  (let ((b (car state)))
+    (cl-transforms:get-yaw (cl-transforms:make-quaternion (aref b 3) (aref b 4) (aref b 5) (aref b 6)))))
+
+(defun base-drive-sweeps (before robot)
+  "The SWEEPs of a base drive from BEFORE to where ROBOT is now, driven as a base does in
+place of what it cannot see: turn on the spot towards the goal, drive there (the base's own
+planner finds a way around obstacles for the robot's footprint: not checked), turn on the spot
+to the goal's heading. The two turns are checked, with the arms and carried objects as they are."
+  (let* ((after (robot-state-vectors robot))
+         (x0 (aref (car before) 0)) (y0 (aref (car before) 1))
+         (x1 (aref (car after) 0)) (y1 (aref (car after) 1))
+         (yaw0 (state-yaw before)) (yaw1 (state-yaw after))
+         (heading (if (< (+ (expt (- x1 x0) 2) (expt (- y1 y0) 2)) 1d-4)
+                      yaw0
+                      (let ((h (atan (- y1 y0) (- x1 x0))))
+                        ;; driving backwards when that needs less turning
+                        (flet ((turn (a b) (abs (wrap-angle (- a b)))))
+                          (if (< (+ (turn h yaw0) (turn h yaw1))
+                                 (+ (turn (+ h pi) yaw0) (turn (+ h pi) yaw1)))
+                              h (+ h pi))))))
+         (heading-at-start (+ yaw0 (wrap-angle (- heading yaw0))))
+         (heading-at-goal (+ yaw1 (wrap-angle (- heading yaw1)))))
+    (append (robot-sweeps (base-state before x0 y0 yaw0) "going (turning at the start)" :base
+                          :robot robot :after (base-state before x0 y0 heading-at-start))
+            (robot-sweeps (base-state after x1 y1 heading-at-goal) "going (turning at the goal)" :base
+                          :robot robot :after (base-state after x1 y1 yaw1)))))
+
 (defun check-motion-sweep (before label kind &key (robot (robot-object)) ignore-links ignore-attached)
   "Check the motion LABEL of KIND that moved ROBOT from BEFORE (ROBOT-STATE-VECTORS) to where it
-is, and act on what its path hits (REPORT-SWEEPS)."
+is, and act on what its path hits (REPORT-SWEEPS). Base drives (KIND :BASE) check their turns
+(BASE-DRIVE-SWEEPS)."
   (when *sweep-check*
-    (report-sweeps (robot-sweeps before label kind :robot robot :ignore-links ignore-links
-                                                   :ignore-attached ignore-attached)
+    (report-sweeps (if (eq kind :base)
+                       (base-drive-sweeps before robot)
+                       (robot-sweeps before label kind :robot robot :ignore-links ignore-links
+                                                       :ignore-attached ignore-attached))
                    :robot robot :before before)))
 
 (defmacro with-sweep-check ((label kind &key (robot '(robot-object))) &body body)
@@ -289,3 +331,7 @@ with sweeps is not acceptable."
           (cond ((null sweeps) (values t nil))
                 ((eq *sweep-check* :fail) (values nil sweeps))
                 (t (report-sweeps sweeps :robot robot) (values t sweeps)))))))
+
+;; plans run their motions in task threads: bindings made around a plan reach them
+(dolist (symbol '(*sweep-check* *sweep-allowed-contacts* *sweep-hooks*))
+  (pushnew symbol cpl:*inherited-specials*))
