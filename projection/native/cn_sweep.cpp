@@ -116,6 +116,21 @@ double shape_radius(const btCollisionShape *s) {
   return std::sqrt(r2);
 }
 
+// The movable joints on the way from the root to LINK, root first.
+void link_chain(const Model &m, int link, std::vector<int> &out) {
+  out.clear();
+  for (int l = link; l >= 0;) {
+    int pj = m.links[l].parent_joint;
+    if (pj < 0) break;
+    int type = m.joints[pj].type;
+    if (type == CN_JOINT_REVOLUTE || type == CN_JOINT_CONTINUOUS || type == CN_JOINT_PRISMATIC)
+      out.push_back(pj);
+    l = m.joints[pj].parent;
+  }
+  std::reverse(out.begin(), out.end());
+}
+
+
 struct Sweep {
   World &w;
   const Object *robot = nullptr;            // null for a body sweep
@@ -209,7 +224,10 @@ struct Sweep {
       if (!c || c->kind != CN_BODY || !c->rb || moving_ids.count(a.obj)) continue;
       int fl = depth == 0 ? a.link : frame_link;
       btTransform r = depth == 0 ? a.rel : rel * a.rel;
-      add_mover(a.obj, -1, c->rb, fl, r);
+      moving_ids.insert(a.obj);  // carried objects are never hit by their carrier
+      std::vector<int> chain;
+      if (robot && fl >= 0) link_chain(*robot->model, fl, chain);
+      if (chain_moves(chain)) add_mover(a.obj, -1, c->rb, fl, r).chain = chain;
       add_attached(a.obj, fl, r, depth + 1);
     }
   }
@@ -260,47 +278,67 @@ struct Sweep {
     return false;
   }
 
-  // Bodies the mover could meet anywhere on its way: its box at the start grown by its path
-  // bound, cut down to the box of its two end boxes grown by the chord bound.
-  void gather_candidates(Mover &m, const btTransform &t0, const btTransform &t1) {
+  // The box mover M can reach anywhere on its way from T0 to T1: its box at the start grown by
+  // its path bound, cut down to the box of its two end boxes grown by the chord bound.
+  void move_box(const Mover &m, const btTransform &t0, const btTransform &t1, btVector3 &lo,
+                btVector3 &hi) const {
     btVector3 lo0, hi0, lo1, hi1;
     m.co->getCollisionShape()->getAabb(t0, lo0, hi0);
     m.co->getCollisionShape()->getAabb(t1, lo1, hi1);
     double dev = std::min(m.B, 3 * m.W * m.B / 8);
     btVector3 g(dev, dev, dev), p(m.B, m.B, m.B);
-    btVector3 lo = lo0, hi = hi0;
+    lo = lo0;
+    hi = hi0;
     lo.setMin(lo1);
     hi.setMax(hi1);
     lo -= g;
     hi += g;
     lo.setMax(lo0 - p);
     hi.setMin(hi0 + p);
+  }
+
+  // Every mover's candidates: the bodies (not the robot's, not carried, not filtered out or
+  // ignored) whose boxes meet its move box, from one broadphase query of all the move boxes.
+  void gather_candidates(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
+    size_t nm = movers.size();
+    std::vector<btVector3> mlo(nm), mhi(nm);
+    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
+    for (size_t i = 0; i < nm; ++i) {
+      const Mover &m = movers[i];
+      btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
+      btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
+      move_box(m, a, b, mlo[i], mhi[i]);
+      lo.setMin(mlo[i]);
+      hi.setMax(mhi[i]);
+    }
     struct Found : btBroadphaseAabbCallback {
-      std::vector<const btCollisionObject *> *out;
+      const Sweep *s;
+      std::vector<const btCollisionObject *> out;
       bool process(const btBroadphaseProxy *bp) override {
-        out->push_back(static_cast<const btCollisionObject *>(bp->m_clientObject));
+        auto *co = static_cast<const btCollisionObject *>(bp->m_clientObject);
+        int ob = co->getUserIndex();
+        if (!(s->robot && ob == s->robot->id) && !s->moving_ids.count(ob)) out.push_back(co);
         return true;
       }
     } found;
-    found.out = &m.candidates;
-    m.candidates.clear();
+    found.s = this;
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
-    const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
-    int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
-    m.candidates.erase(
-        std::remove_if(m.candidates.begin(), m.candidates.end(),
-                       [&](const btCollisionObject *co) {
-                         int ob, lb;
-                         decode_rb(co, ob, lb);
-                         if (moving_ids.count(ob) || (robot && ob == robot->id)) return true;
-                         const btBroadphaseProxy *h = co->getBroadphaseHandle();
-                         if (!(h->m_collisionFilterGroup & mask) || !(group & h->m_collisionFilterMask))
-                           return true;
-                         return ignored(m, ob, lb);
-                       }),
-        m.candidates.end());
-    m.done.assign(m.candidates.size(), 0);
-    m.clear_until.assign(m.candidates.size(), 0);
+    for (size_t i = 0; i < nm; ++i) {
+      Mover &m = movers[i];
+      m.candidates.clear();
+      const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
+      int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
+      for (const btCollisionObject *co : found.out) {
+        const btBroadphaseProxy *h = co->getBroadphaseHandle();
+        if (!TestAabbAgainstAabb2(mlo[i], mhi[i], h->m_aabbMin, h->m_aabbMax)) continue;
+        if (!(h->m_collisionFilterGroup & mask) || !(group & h->m_collisionFilterMask)) continue;
+        int ob, lb;
+        decode_rb(co, ob, lb);
+        if (!ignored(m, ob, lb)) m.candidates.push_back(co);
+      }
+      m.done.assign(m.candidates.size(), 0);
+      m.clear_until.assign(m.candidates.size(), 0);
+    }
   }
 
   bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
@@ -355,14 +393,29 @@ struct Sweep {
     return r >= 0 ? r : confirm(m, other, tm, pm, tb, pb, point, depth + 1);
   }
 
+  bool base_moves = false;
+
+  // The joint changes, once the ends are set.
+  void prepare() {
+    base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
+    if (!robot) return;
+    const Model &md = *robot->model;
+    dv.assign(q0.size(), 0);
+    for (size_t j = 0; j < q0.size(); ++j)
+      dv[j] = model_joint_value(md, q1, (int)j) - model_joint_value(md, q0, (int)j);
+  }
+
+  bool chain_moves(const std::vector<int> &chain) const {
+    if (base_moves) return true;
+    for (int j : chain)
+      if (dv[j] != 0) return true;
+    return false;
+  }
+
   void run(double max_step) {
-    bool base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
     std::vector<btTransform> lp0, lp1;
     if (robot) {
       const Model &md = *robot->model;
-      dv.assign(q0.size(), 0);
-      for (size_t j = 0; j < q0.size(); ++j)
-        dv[j] = model_joint_value(md, q1, (int)j) - model_joint_value(md, q0, (int)j);
       compute_link_poses(md, base0, q0, lp0);
       compute_link_poses(md, base1, q1, lp1);
     }
@@ -400,11 +453,7 @@ struct Sweep {
     levels = 0;
     while ((double)(1 << levels) < n_real) ++levels;
     n = 1 << levels;
-    for (Mover &m : movers) {
-      btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
-      btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
-      gather_candidates(m, a, b);
-    }
+    gather_candidates(lp0, lp1);
     pool.resize(levels + 2);
     for (size_t i = 0; i < movers.size(); ++i) {
       if (movers[i].candidates.empty()) continue;
@@ -555,20 +604,6 @@ int write_hits(std::vector<Hit> &hits, int *out4, double *outd, int cap) {
   return n;
 }
 
-// The movable joints on the way from the root to LINK, root first.
-void link_chain(const Model &m, int link, std::vector<int> &out) {
-  out.clear();
-  for (int l = link; l >= 0;) {
-    int pj = m.links[l].parent_joint;
-    if (pj < 0) break;
-    int type = m.joints[pj].type;
-    if (type == CN_JOINT_REVOLUTE || type == CN_JOINT_CONTINUOUS || type == CN_JOINT_PRISMATIC)
-      out.push_back(pj);
-    l = m.joints[pj].parent;
-  }
-  std::reverse(out.begin(), out.end());
-}
-
 }  // namespace
 }  // namespace cn
 
@@ -604,15 +639,14 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
     s->n_ignore = n_ignore;
     s->tol = tolerance;
     s->skip_start = (flags & CN_SWEEP_SKIP_START_CONTACTS) != 0;
-    const Model &m = *r.model;
+    s->prepare();
+    std::vector<int> chain;
     for (size_t l = 0; l < r.link_rb.size(); ++l) {
       if (!r.link_rb[l]) continue;
-      Mover &mv = s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity());
-      link_chain(m, (int)l, mv.chain);
+      link_chain(*r.model, (int)l, chain);
+      if (s->chain_moves(chain)) s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity()).chain = chain;
     }
-    size_t n_links = s->movers.size();
     s->add_attached(rh, -1, btTransform::getIdentity(), 0);
-    for (size_t i = n_links; i < s->movers.size(); ++i) link_chain(m, s->movers[i].frame_link, s->movers[i].chain);
     s->run(max_step);
     return write_hits(s->hits, out4, outd, cap);
   });
@@ -635,6 +669,7 @@ int cn_body_sweep_check(int wh, int bh, const double *from7, const double *to7, 
     s->n_ignore = n_ignore;
     s->tol = tolerance;
     s->skip_start = (flags & CN_SWEEP_SKIP_START_CONTACTS) != 0;
+    s->prepare();
     s->add_mover(bh, -1, b.rb, -1, btTransform::getIdentity());
     s->add_attached(bh, -1, btTransform::getIdentity(), 1);
     s->run(max_step);
