@@ -151,7 +151,18 @@ struct Sweep {
   SweptHull hull;
   std::vector<Hit> hits;
 
-  explicit Sweep(World &wd) : w(wd) { hull_probe.setCollisionShape(&hull); }
+  Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
+      : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {
+    hull_probe.setCollisionShape(&hull);
+    sync_aabbs(w);
+  }
+
+  // The base (or body) poses at the ends, then the joint changes (q0, q1 set before).
+  void set_ends(const btTransform &a, const btTransform &b) {
+    set_base(a, b);
+    prepare();
+  }
 
   void set_base(const btTransform &a, const btTransform &b) {
     base0 = a;
@@ -578,7 +589,9 @@ void check_ignore(World &w, const int *ignore4, int n) {
   }
 }
 
-void check_common(double max_step, double tol, int flags, int cap, const void *o4, const void *od) {
+void check_common(World &w, const int *ignore4, int n_ignore, double max_step, double tol,
+                  int flags, int cap, const void *o4, const void *od) {
+  check_ignore(w, ignore4, n_ignore);
   check_positive(max_step, "maximum step");
   check_positive(tol, "tolerance");
   if (flags & ~CN_SWEEP_SKIP_START_CONTACTS) fail(CN_E_ARG, "sweep flags %d, expected 0 or %d", flags, CN_SWEEP_SKIP_START_CONTACTS);
@@ -627,19 +640,12 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
       if (!std::isfinite(q_from[j])) fail(CN_E_ARG, "start joint value %d is %s", j, num(q_from[j]).c_str());
       if (!std::isfinite(q_to[j])) fail(CN_E_ARG, "end joint value %d is %s", j, num(q_to[j]).c_str());
     }
-    check_ignore(w, ignore4, n_ignore);
-    check_common(max_step, tolerance, flags, cap, out4, outd);
-    sync_aabbs(w);
-    std::unique_ptr<Sweep> s(new Sweep(w));
+    check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
+    std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
     s->robot = &r;
-    s->set_base(b0, b1);
     s->q0.assign(q_from, q_from + nj);
     s->q1.assign(q_to, q_to + nj);
-    s->ignore4 = ignore4;
-    s->n_ignore = n_ignore;
-    s->tol = tolerance;
-    s->skip_start = (flags & CN_SWEEP_SKIP_START_CONTACTS) != 0;
-    s->prepare();
+    s->set_ends(b0, b1);
     std::vector<int> chain;
     for (size_t l = 0; l < r.link_rb.size(); ++l) {
       if (!r.link_rb[l]) continue;
@@ -660,16 +666,9 @@ int cn_body_sweep_check(int wh, int bh, const double *from7, const double *to7, 
     Object &b = w.body(bh);
     btTransform t0 = read_pose(from7, "start pose"), t1 = read_pose(to7, "end pose");
     if (b.shape && b.shape->kind == 0) fail(CN_E_ARG, "body %d is a plane: it cannot sweep", bh);
-    check_ignore(w, ignore4, n_ignore);
-    check_common(max_step, tolerance, flags, cap, out4, outd);
-    sync_aabbs(w);
-    std::unique_ptr<Sweep> s(new Sweep(w));
-    s->set_base(t0, t1);
-    s->ignore4 = ignore4;
-    s->n_ignore = n_ignore;
-    s->tol = tolerance;
-    s->skip_start = (flags & CN_SWEEP_SKIP_START_CONTACTS) != 0;
-    s->prepare();
+    check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
+    std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
+    s->set_ends(t0, t1);
     s->add_mover(bh, -1, b.rb, -1, btTransform::getIdentity());
     s->add_attached(bh, -1, btTransform::getIdentity(), 1);
     s->run(max_step);

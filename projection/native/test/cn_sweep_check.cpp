@@ -8,16 +8,7 @@
 #include <random>
 #include <vector>
 
-static int failures = 0, checks = 0;
-#define CHECK(c)                                                                     \
-  do {                                                                               \
-    ++checks;                                                                        \
-    if (!(c)) {                                                                      \
-      ++failures;                                                                    \
-      fprintf(stderr, "FAIL %s:%d: %s (last error: %s)\n", __FILE__, __LINE__, #c,   \
-              cn_last_error());                                                      \
-    }                                                                                \
-  } while (0)
+#include "cn_test.h"
 
 // A one-metre horizontal bar turning about z at the origin, 0.5 m above the floor, and a
 // second joint that lifts a 0.3 m finger at its end.
