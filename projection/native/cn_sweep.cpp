@@ -375,33 +375,39 @@ struct Sweep {
     return c;
   }
 
-  // Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1. KNOWN: the
-  // distance at ta when already known to be in (0, path], else a negative number.
+  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther).
+  double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                     btVector3 *point = nullptr) {
+    Closest c = distance(m, t, maxd, other);
+    if (point) *point = c.point;
+    return c.found ? c.best : maxd;
+  }
+
+  // Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1. DA and DB are
+  // the distances at the ends, NaN while unknown (computed here and handed on). The distance
+  // changes no faster than the mover's points move, so an interval is clear when its hull
+  // misses OTHER, or when DA + DB exceeds its path bound (going down to 0 and back up again
+  // needs at least that much motion).
   double confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
-                 double tb, const btTransform &pb, btVector3 &point, int depth, double known = -1) {
+                 double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
+                 int depth) {
     double h = tb - ta;
     double path = h * m.B;
     if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
-    if (known < 0) {
-      Closest da = distance(m, pa, path + tol, other);
-      if (da.found && da.best <= 0) {
-        point = da.point;
-        return ta;
-      }
-      if (!da.found || da.best > path) return -1;
-    }
+    if (std::isnan(da)) da = distance_at(m, pa, path + tol, other, &point);
+    if (da <= 0) return ta;
+    if (da > path) return -1;
+    if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
+    if (db > 0 && da + db > path) return -1;
     if (path <= tol || depth > 40) {
-      Closest db = distance(m, pb, tol, other);
-      if (db.found && db.best <= 0) {
-        point = db.point;
-        return tb;
-      }
-      return -1;
+      if (db > 0) return -1;
+      distance_at(m, pb, tol, other, &point);
+      return tb;
     }
-    double tm = 0.5 * (ta + tb);
+    double tm = 0.5 * (ta + tb), dm = NAN;
     btTransform pm = pose_at(m, tm);
-    double r = confirm(m, other, ta, pa, tm, pm, point, depth + 1);
-    return r >= 0 ? r : confirm(m, other, tm, pm, tb, pb, point, depth + 1);
+    double r = confirm(m, other, ta, pa, da, tm, pm, dm, point, depth + 1);
+    return r >= 0 ? r : confirm(m, other, tm, pm, dm, tb, pb, db, point, depth + 1);
   }
 
   bool base_moves = false;
@@ -528,6 +534,20 @@ struct Sweep {
       if (TestAabbAgainstAabb2(lo, hi, hp->m_aabbMin, hp->m_aabbMax)) keep.push_back(c);
     }
     if (keep.empty()) return;
+    if (kb - ka == 8) {
+      // one hull over eight sub-steps clears, in one test, a pair that passes close by
+      // (everything before ta is clear already: the pair is clear up to tb)
+      keep.erase(std::remove_if(keep.begin(), keep.end(),
+                                [&](int c) {
+                                  if (ta < m.clear_until[c] ||
+                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, m.candidates[c]))
+                                    return false;
+                                  m.clear_until[c] = tb;
+                                  return true;
+                                }),
+                 keep.end());
+      if (keep.empty()) return;
+    }
     if (kb - ka > 1) {
       int km = (ka + kb) / 2;
       descend(i, ka, km, depth + 1);
@@ -537,7 +557,7 @@ struct Sweep {
     for (int c : keep) {
       if (m.done[c] || tb <= m.clear_until[c]) continue;
       const btCollisionObject *other = m.candidates[c];
-      double known = -1;
+      double known = NAN;
       // conservative advancement: no point of the mover moves faster than B, so a pair
       // apart by d at ta stays apart until ta + d / B
       if (ta >= m.clear_until[c]) {
@@ -560,7 +580,8 @@ struct Sweep {
         known = d;
       }
       btVector3 point;
-      double t = confirm(m, other, ta, slot_pose[a], tb, slot_pose[b], point, 0, known);
+      double db = NAN;
+      double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
       if (t < 0) continue;
       m.done[c] = 1;
       int ob, lb;
