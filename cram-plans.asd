@@ -123,6 +123,7 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "native-world")
                (:file "native-robot")
                (:file "native-query")
+               (:file "native-sweep")
                (:file "native-render")
                (:file "native-ik")))
 
@@ -279,6 +280,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :components ((:file "package")
                (:file "robot")
                (:file "tf")
+               (:file "sweep")
                (:file "low-level-base")
                (:file "ik")
                (:file "ik-solver")
@@ -343,6 +345,7 @@ each motion, replays written to disk, and BTR:VIEWER / BTR:DEBUG-WINDOW, which l
   :components ((:file "package")
                (:file "scene")
                (:file "recorder")
+               (:file "sweeps")
                (:file "export")
                (:file "entry")
                (:static-file "viewer.js")
@@ -561,7 +564,14 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"
                "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"
                "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"
-               "cram-plans/tests/repl" "cram-plans/tests/actionlib"))
+               "cram-plans/tests/repl" "cram-plans/tests/actionlib" "cram-plans/tests/sweep"))
+
+(defsystem "cram-plans/tests/sweep"
+  :description "Sweep checks between key poses: the shim's call and the motions' *SWEEP-CHECK*."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-bullet-world-tutorial" "cram-plans/replay")
+  :pathname "tests/"
+  :components ((:file "sweep-tests")))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."

@@ -96,11 +96,14 @@ the one this process made first: see RESET-PROJECTION). Returns a plist: :succes
          (captured (make-string-output-stream))
          (stream (make-broadcast-stream captured log-stream))
          (start (get-internal-real-time))
+         (sweeps 0)
          (error nil))
     (when (and pictures out-dir)
       (btw-tut::spawn-bottle pose)
       (btr:png-snapshot (merge-pathnames "start.png" out-dir) :look-at '(-1.5 -0.7 0.8)))
-    (let ((cpl:*log-stream* stream))
+    (let ((cpl:*log-stream* stream)
+          (urdf-proj:*sweep-hooks* (cons (lambda (sweep) (declare (ignore sweep)) (incf sweeps))
+                                         urdf-proj:*sweep-hooks*)))
       (handler-case
           (progn
             (btw-tut:move-bottle pose))
@@ -111,7 +114,8 @@ the one this process made first: see RESET-PROJECTION). Returns a plist: :succes
       (append (list :success (and (null error) (<= distance *tolerance*))
                     :distance (if (< distance 1d6) distance nil)
                     :seconds (float seconds 1d0)
-                    :error error)
+                    :error error
+                    :sweeps sweeps)
               (parse-log log)
               (list :log log)))))
 

@@ -161,7 +161,8 @@ any yaw), drawn from SEED."
               (gethash "distance" record) (getf result :distance)
               (gethash "seconds" record) (getf result :seconds)
               (gethash "error" record) (let ((e (getf result :error)))
-                                         (and e (first-line e))))
+                                         (and e (first-line e)))
+              (gethash "sweeps" record) (getf result :sweeps 0))
         (loop for key in '(:look-direction :new-grasp :new-arm :grasp-failure :perception-failure)
               for name in *recovery-keys*
               do (setf (gethash name record) (getf result key)))
@@ -179,7 +180,8 @@ any yaw), drawn from SEED."
           (gethash "success" record) nil
           (gethash "distance" record) nil
           (gethash "seconds" record) 0
-          (gethash "error" record) message)
+          (gethash "error" record) message
+          (gethash "sweeps" record) 0)
     (dolist (key *recovery-keys*) (setf (gethash key record) 0))
     record))
 
@@ -532,6 +534,10 @@ success rate."
       (when (plusp (hash-table-count types))
         (format stream "failure types:~%")
         (maphash (lambda (f c) (format stream "  ~5d  ~a~%" c f)) types)))
+    (let ((swept (count-if (lambda (r) (plusp (or (gethash "sweeps" r) 0))) records))
+          (total (reduce #'+ records :key (lambda (r) (or (gethash "sweeps" r) 0)))))
+      (format stream "sweeps (motions whose path hits something): ~d in ~d runs, ~,2f per run~%"
+              total swept (if (zerop n) 0 (/ total n))))
     (format stream "failures:~%")
     (if (zerop (hash-table-count errors))
         (format stream "  none~%")

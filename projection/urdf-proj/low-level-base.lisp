@@ -96,7 +96,8 @@ NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base
 odom_x_joint / odom_y_joint / odom_z_joint entries."
   (let* ((robot (robot-object))
          (goal (navigation-goal-in-map pose))
-         (before (btr:pose robot)))
+         (before (btr:pose robot))
+         (state (and *sweep-check* (robot-state-vectors robot))))
     (with-motion ("going")
       (setf (btr:pose robot) goal)
       (let ((hits (robot-collisions :robot robot)))
@@ -105,6 +106,7 @@ odom_x_joint / odom_y_joint / odom_z_joint entries."
           (cpl:fail 'common-fail:navigation-pose-unreachable
                     :description (format nil "Pose ~a is unreachable: the robot would collide with ~{~s~^, ~}."
                                          (pose-summary goal) hits))))
+      (when state (check-motion-sweep state "going" :base :robot robot))
       (let ((o (cl-transforms:origin goal)))
         (append (mapcar (lambda (e) (list (car e) (cdr e))) (btr:joint-states robot))
                 (list (list "odom_x_joint" (cl-transforms:x o))
@@ -142,7 +144,8 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
                          (:middle (/ (+ lo hi) 2))
                          (t joint-angle)))
                (value (max lo (min hi wanted))))
-          (btr:set-robot-state-from-joints (list (list joint value)) robot)
+          (with-sweep-check ("moving-torso" :torso :robot robot)
+            (btr:set-robot-state-from-joints (list (list joint value)) robot))
           (when (> (abs (- value wanted)) 1d-9)
             (cpl:fail 'common-fail:torso-goal-not-reached
                       :description (format nil "Torso goal ~a is outside the limits [~a, ~a] of ~a; ~
