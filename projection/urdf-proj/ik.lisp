@@ -20,6 +20,11 @@ environment, so projections are repeatable.")
 (defparameter *ik-rotation-tolerance* 1d-2 "Largest accepted IK orientation error (radians).")
 (defparameter *ik-max-restarts* 40 "Random restarts of one IK call after the seeded attempt.")
 (defparameter *ik-max-iterations* 60 "Iterations of one IK attempt.")
+(defparameter *ik-fallback-restarts* 0
+  "Random restarts of the Lisp solver after the native solver of the chain failed (it made
+*IK-MAX-RESTARTS* of its own): the Lisp solver's seeded attempt runs, then this many random
+ones. Measured on 150 randomized move-bottle runs: of 1 111 native failures, 40 Lisp restarts
+each solved one, at 9 ms per run.")
 
 (deftype dvec () '(simple-array double-float (*)))
 

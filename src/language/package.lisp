@@ -34,4 +34,4 @@
    #:node-duration #:find-task-tree-nodes #:node-pictures #:note-picture
    ;; logging
    #:log-message #:log-debug #:log-info #:log-warn #:log-error
-   #:*log-stream* #:*log-tags* #:*log-level* #:with-log-tags))
+   #:*log-stream* #:*log-tags* #:*log-level* #:*log-tally* #:with-log-tags))

@@ -9,7 +9,7 @@
 (defvar *inherited-specials*
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
-    *log-stream* *log-tags* *log-level* *sleep-function*)
+    *log-stream* *log-tags* *log-level* *log-tally* *sleep-function*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
