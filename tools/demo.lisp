@@ -85,6 +85,12 @@ the URDFs parsed when the saved core was built."
       (btw-tut:init-projection)
       (call-with-preparsed-urdfs #'btw-tut:init-projection)))
 
+(defun monotonic-seconds ()
+  "Seconds on the system's monotonic clock, to the nanosecond (SBCL's internal real time
+advances in steps of a few milliseconds)."
+  (multiple-value-bind (seconds nanoseconds) (sb-unix::clock-gettime 1)   ; CLOCK_MONOTONIC
+    (+ seconds (* nanoseconds 1d-9))))
+
 (defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*) reuse-world)
   "Run move-bottle with the bottle at POSE in a fresh belief state (with REUSE-WORLD, a copy of
 the one this process made first: see RESET-PROJECTION). Returns a plist: :success, :distance,
@@ -99,7 +105,7 @@ is neither formatted nor kept)."
          (captured (and (not quiet) (make-string-output-stream)))
          (stream (if quiet log-stream (make-broadcast-stream captured log-stream)))
          (tally (make-hash-table :test 'equal))
-         (start (get-internal-real-time))
+         (start (monotonic-seconds))
          (error nil))
     (when (and pictures out-dir)
       (btw-tut::spawn-bottle pose)
@@ -109,7 +115,7 @@ is neither formatted nor kept)."
           (progn
             (btw-tut:move-bottle pose))
         (error (e) (setf error (princ-to-string e)))))
-    (let* ((seconds (/ (- (get-internal-real-time) start) internal-time-units-per-second))
+    (let* ((seconds (- (monotonic-seconds) start))
            (distance (distance-to-destination))
            (log (and captured (get-output-stream-string captured))))
       (append (list :success (and (null error) (<= distance *tolerance*))

@@ -9,7 +9,7 @@
   "One node of the task tree recorded while a top-level plan runs."
   (kind :plan :type keyword)
   (name nil)
-  (designator nil)
+  (%designator nil)     ; the printed designator, or (object . package) until someone asks
   (parent nil)
   (%children '())
   (start-time 0 :type integer)
@@ -26,7 +26,6 @@
 (setf (documentation 'node-kind 'function)
       "The kind of a task tree node: :TOP-LEVEL, :PLAN, :ACTION, :MOTION, :PAR, :PURSUE, :TRY-ALL, :PAR-CHILD or any keyword a layer uses."
       (documentation 'node-name 'function) "The name of a task tree node (a symbol or string)."
-      (documentation 'node-designator 'function) "The printed designator of a task tree node, or NIL."
       (documentation 'node-parent 'function) "The parent node, NIL for the root."
       (documentation 'node-start-time 'function) "Monotonic clock time (microseconds) at which the node started."
       (documentation 'node-end-time 'function) "Monotonic clock time (microseconds) at which the node ended, NIL while it runs."
@@ -72,11 +71,24 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
                            (prin1-to-string designator))
              (error () (format nil "<unprintable ~s>" (type-of designator)))))))
 
+(defun node-designator (node)
+  "The printed designator of a task tree node, or NIL. A designator object given to the node is
+printed (in the package current when the node was made) the first time this is asked: a task
+tree nobody reads prints nothing."
+  (let ((d (node-%designator node)))
+    (if (consp d)
+        (let ((text (let ((*package* (cdr d))) (designator-string (car d)))))
+          (bt:with-lock-held ((node-lock node))
+            (setf (node-%designator node) text)))
+        d)))
+
 (defun make-task-tree-node (kind name &key designator parent)
   "Create a running node, attached as the last child of PARENT when given."
   (check-type kind keyword)
   (let ((node (%make-task-tree-node :kind kind :name name
-                                    :designator (designator-string designator)
+                                    :%designator (if (or (null designator) (stringp designator))
+                                                     designator
+                                                     (cons designator *package*))
                                     :parent parent
                                     :start-time (monotonic-microseconds)
                                     :start-unix (unix-time))))
