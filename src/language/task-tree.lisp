@@ -9,7 +9,7 @@
   "One node of the task tree recorded while a top-level plan runs."
   (kind :plan :type keyword)
   (name nil)
-  (%designator nil)     ; the printed designator, or (object . package) until someone asks
+  (%designator nil)     ; the printed designator, or (function . package) until someone asks
   (parent nil)
   (%children '())
   (start-time 0 :type integer)
@@ -72,23 +72,25 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
              (error () (format nil "<unprintable ~s>" (type-of designator)))))))
 
 (defun node-designator (node)
-  "The printed designator of a task tree node, or NIL. A designator object given to the node is
-printed (in the package current when the node was made) the first time this is asked: a task
-tree nobody reads prints nothing."
+  "The printed designator of a task tree node, or NIL. A node made with a function as its
+designator calls it and prints its value (in the package current when the node was made) the
+first time this is asked: a task tree nobody reads prints nothing."
   (let ((d (node-%designator node)))
     (if (consp d)
-        (let ((text (let ((*package* (cdr d))) (designator-string (car d)))))
+        (let ((text (let ((*package* (cdr d))) (designator-string (funcall (car d))))))
           (bt:with-lock-held ((node-lock node))
             (setf (node-%designator node) text)))
         d)))
 
 (defun make-task-tree-node (kind name &key designator parent)
-  "Create a running node, attached as the last child of PARENT when given."
+  "Create a running node, attached as the last child of PARENT when given. DESIGNATOR is
+printed now, unless it is a function: then NODE-DESIGNATOR calls it when first asked (for a
+value that does not change meanwhile)."
   (check-type kind keyword)
   (let ((node (%make-task-tree-node :kind kind :name name
-                                    :%designator (if (or (null designator) (stringp designator))
-                                                     designator
-                                                     (cons designator *package*))
+                                    :%designator (if (functionp designator)
+                                                     (cons designator *package*)
+                                                     (designator-string designator))
                                     :parent parent
                                     :start-time (monotonic-microseconds)
                                     :start-unix (unix-time))))
