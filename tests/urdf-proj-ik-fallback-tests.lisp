@@ -1,5 +1,6 @@
 ;;;; Tests of the IK solvers' division of work: after the native solver of a chain failed (it
-;;;; made its own random restarts), the Lisp solver makes only URDF-PROJ::*IK-FALLBACK-RESTARTS*.
+;;;; made its own random restarts), the Lisp solver tries only as URDF-PROJ::*IK-FALLBACK-RESTARTS*
+;;;; says (by default not at all).
 
 (in-package :cram-plans-tests.urdf-proj)
 
@@ -22,6 +23,10 @@
                                          (cl-transforms:make-identity-rotation)))
            (near (urdf-proj:chain-forward-kinematics chain '(0.5 0.3 0.2 -1.0 0.4 -0.6 0.1))))
       (is (urdf-proj::ik-chain-native chain) "the PR2's arm has a native chain")
+      (multiple-value-bind (attempts solution)
+          (lisp-attempts (lambda () (urdf-proj:solve-ik chain far :max-restarts 5)))
+        (is (null solution))
+        (is (= 0 attempts) "by default the Lisp solver does not try after a native failure"))
       (let ((urdf-proj::*ik-fallback-restarts* 0))
         (multiple-value-bind (attempts solution)
             (lisp-attempts (lambda () (urdf-proj:solve-ik chain far :max-restarts 5)))
