@@ -222,10 +222,28 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
+(defun run-task-here (group thunk node)
+  "Run THUNK as a task of GROUP in this thread (which runs no task), as SPAWN-TASK's thread
+would: the task's bindings, its outcome in GROUP. Returns the task."
+  (let ((task (%make-task :name "top-level" :parent nil :index 0 :group group :status :running
+                          :thread sb-thread:*current-thread*)))
+    (bt:with-lock-held ((task-group-lock group))
+      (push task (task-group-tasks group)))
+    (let ((*current-task* task)
+          (*task-tree-node* nil))
+      (unwind-protect (execute-task task thunk node)
+        (unless (task-done-p task)
+          ;; unwound from outside the plan (an interrupt of this thread): nothing is left running
+          (setf (task-status task) :evaporated))))
+    task))
+
 (defun call-as-top-level (name thunk)
-  "Run THUNK as the top-level task named NAME in a new thread, with a fresh
-task tree, and wait for it. Returns its values; a failure that escapes it is
-signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
+  "Run THUNK as the top-level task named NAME, with a fresh task tree, and wait
+for it. Returns its values; a failure that escapes it is signalled here with
+ERROR (a wrapped Lisp error is unwrapped first). Called from a thread that runs
+no task (a REPL, a program), the task runs in that thread: no thread is started
+and none waits; otherwise (a top-level inside a task whose *CURRENT-TASK* was
+unbound) in a new thread."
   (when *current-task*
     (error 'nested-top-level-error :name name :outer *current-task*))
   (let* ((root (make-task-tree-node :top-level name))
@@ -233,19 +251,24 @@ signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
          (*task-tree-node* nil))
     (setf *last-task-tree* root)
     (let ((decision
-            (unwind-protect
-                 (progn
-                   (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
-                   (let ((task (first (task-group-tasks group)))
-                         (lock (task-group-lock group)))
-                     (bt:with-lock-held (lock)
-                       (loop
-                         (case (task-status task)
-                           (:succeeded (return (list :succeeded (task-values task))))
-                           ((:failed :evaporated)
-                            (return (list (task-status task) (task-failure task)))))
-                         (sb-thread:condition-wait (task-group-condition group) lock)))))
-              (evaporate-and-join group))))
+            (if (null *evaporation-target*)
+                (let ((task (run-task-here group thunk root)))
+                  (if (eq (task-status task) :succeeded)
+                      (list :succeeded (task-values task))
+                      (list (task-status task) (task-failure task))))
+                (unwind-protect
+                     (progn
+                       (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
+                       (let ((task (first (task-group-tasks group)))
+                             (lock (task-group-lock group)))
+                         (bt:with-lock-held (lock)
+                           (loop
+                             (case (task-status task)
+                               (:succeeded (return (list :succeeded (task-values task))))
+                               ((:failed :evaporated)
+                                (return (list (task-status task) (task-failure task)))))
+                             (sb-thread:condition-wait (task-group-condition group) lock)))))
+                  (evaporate-and-join group)))))
       (destructuring-bind (status payload) decision
         (ecase status
           (:succeeded (values-list payload))
