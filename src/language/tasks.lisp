@@ -222,18 +222,23 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
-(defun run-task-here (group thunk node)
-  "Run THUNK as a task of GROUP in this thread (which runs no task), as SPAWN-TASK's thread
-would: the task's bindings, its outcome in GROUP. Returns the task."
-  (let ((task (%make-task :name "top-level" :parent nil :index 0 :group group :status :running
+(defun run-task-here (name group thunk node)
+  "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
+thread would: the task's bindings, its outcome in GROUP. Returns the task."
+  (let ((task (%make-task :name name :parent nil :index 0 :group group :status :running
                           :thread sb-thread:*current-thread*)))
     (bt:with-lock-held ((task-group-lock group))
       (push task (task-group-tasks group)))
     (let ((*current-task* task)
           (*task-tree-node* nil))
-      (unwind-protect (execute-task task thunk node)
+      (unwind-protect
+           ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
+           ;; debugger (ABORT) is then no foreign exit
+           (handler-bind ((sb-sys:interactive-interrupt
+                            (lambda (c) (declare (ignore c)) (setf (task-evaporating task) t))))
+             (execute-task task thunk node))
         (unless (task-done-p task)
-          ;; unwound from outside the plan (an interrupt of this thread): nothing is left running
+          ;; unwound from outside the plan: nothing is left running
           (setf (task-status task) :evaporated))))
     task))
 
@@ -252,7 +257,7 @@ unbound) in a new thread."
     (setf *last-task-tree* root)
     (let ((decision
             (if (null *evaporation-target*)
-                (let ((task (run-task-here group thunk root)))
+                (let ((task (run-task-here (format nil "top-level ~a" name) group thunk root)))
                   (if (eq (task-status task) :succeeded)
                       (list :succeeded (task-values task))
                       (list (task-status task) (task-failure task))))
