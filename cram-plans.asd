@@ -466,7 +466,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "language-tree-tests")
                (:file "cpl-api-tests")
                (:file "cpl-tasks-tests")
-               (:file "cram-walker-tests")))
+               (:file "cram-walker-tests")
+               (:file "language-quiet-log-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
@@ -522,7 +523,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/cram-pepper-description")
   :pathname "tests/"
   :serial t
-  :components ((:file "urdf-proj-tests")))
+  :components ((:file "urdf-proj-tests")
+               (:file "urdf-proj-ik-fallback-tests")))
 
 (defsystem "cram-plans/tests/costmap"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-location-costmap" "cram-plans/cram-pr2-description")

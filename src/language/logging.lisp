@@ -81,16 +81,40 @@ of a message, e.g. (PICK-PLACE PICK-UP).")
     (let ((millis (floor (* fraction 1000))))
       (format nil "~d.~3,'0d" seconds (min millis 999)))))
 
+(defvar *log-tally* nil
+  "NIL, or an EQUAL hash table in which LOG-MESSAGE counts every line that passes
+*LOG-LEVEL*, under the key (LEVEL . TAGS) (TAGS as a list), whether the line is
+written or not: how often a plan logged a failure or a recovery, without anyone
+formatting or reading the text. Child tasks inherit it.")
+
+(defvar *tally-lock* (bt:make-lock "cpl log tally"))
+
+(declaim (inline sink-stream-p))
+(defun sink-stream-p (stream)
+  "True when STREAM discards what is written to it: a broadcast stream without
+components, such as (MAKE-BROADCAST-STREAM)."
+  (and (typep stream 'broadcast-stream)
+       (null (broadcast-stream-streams stream))))
+
+(defun tally-line (level tags)
+  (let ((key (cons level (if (listp tags) tags (list tags)))))
+    (bt:with-lock-held (*tally-lock*)
+      (incf (gethash key *log-tally* 0)))))
+
 (defun log-message (level tags format-control &rest format-arguments)
   "Write one line `[(TAG ...) LEVEL] 1649925566.714: message' to *LOG-STREAM*
 \(NIL: *STANDARD-OUTPUT*) when LEVEL (:DEBUG, :INFO, :WARN or :ERROR) is at
 least *LOG-LEVEL*. TAGS is a symbol or a list of symbols. Whole lines are written atomically, so lines from
 concurrent tasks do not interleave. Returns the message string, or NIL when the
-level is filtered out."
+level is filtered out or *LOG-STREAM* discards everything (a broadcast stream
+without components): a line nobody reads is not formatted. *LOG-TALLY* counts
+the line in both cases."
   (let ((rank (level-rank level)))
     (unless (stringp format-control)
       (error "log-message: expected a format control string, got ~s." format-control))
-    (when (>= rank (level-rank *log-level*))
+    (when (and (>= rank (level-rank *log-level*))
+               (progn (when *log-tally* (tally-line level tags))
+                      (not (sink-stream-p *log-stream*))))
       (let* ((message (apply #'format nil format-control format-arguments))
              (line (format nil "[~:@(~a~) ~a] ~a: ~a"
                            (if (listp tags) (format nil "~a" tags) (format nil "(~a)" tags))

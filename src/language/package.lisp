@@ -51,7 +51,7 @@
    #:node-duration #:find-task-tree-nodes #:node-pictures #:note-picture
    ;; logging
    #:log-message #:log-debug #:log-info #:log-warn #:log-error
-   #:*log-stream* #:*log-tags* #:*log-level* #:with-log-tags
+   #:*log-stream* #:*log-tags* #:*log-level* #:*log-tally* #:with-log-tags
    ;; the debugger inside plans
    #:*debug-on-lisp-errors* #:*break-on-plan-failures* #:abort-plan
    #:plan-aborted #:plan-aborted-name))

@@ -9,7 +9,7 @@
 (defvar *inherited-specials*
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
-    *log-stream* *log-tags* *log-level* *sleep-function*
+    *log-stream* *log-tags* *log-level* *log-tally* *sleep-function*
     *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
@@ -241,10 +241,33 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
+(defun run-task-here (name group thunk node)
+  "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
+thread would: the task's bindings, its outcome in GROUP. Returns the task."
+  (let ((task (%make-task :name name :parent nil :index 0 :group group :status :running
+                          :thread sb-thread:*current-thread*)))
+    (bt:with-lock-held ((task-group-lock group))
+      (push task (task-group-tasks group)))
+    (let ((*current-task* task)
+          (*task-tree-node* nil))
+      (unwind-protect
+           ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
+           ;; debugger (ABORT) is then no foreign exit
+           (handler-bind ((sb-sys:interactive-interrupt
+                            (lambda (c) (declare (ignore c)) (setf (task-evaporating task) t))))
+             (execute-task task thunk node))
+        (unless (task-done-p task)
+          ;; unwound from outside the plan: nothing is left running
+          (setf (task-status task) :evaporated))))
+    task))
+
 (defun call-as-top-level (name thunk)
-  "Run THUNK as the top-level task named NAME in a new thread, with a fresh
-task tree, and wait for it. Returns its values; a failure that escapes it is
-signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
+  "Run THUNK as the top-level task named NAME, with a fresh task tree, and wait
+for it. Returns its values; a failure that escapes it is signalled here with
+ERROR (a wrapped Lisp error is unwrapped first). Called from a thread that runs
+no task (a REPL, a program), the task runs in that thread: no thread is started
+and none waits; otherwise (a top-level inside a task whose *CURRENT-TASK* was
+unbound) in a new thread."
   (when *current-task*
     (error 'nested-top-level-error :name name :outer *current-task*))
   (let* ((root (make-task-tree-node :top-level name))
@@ -253,18 +276,24 @@ signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
     (setf *last-task-tree* root)
     (let ((decision
             (unwind-protect
-                 (progn
-                   (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
-                   (let ((task (first (task-group-tasks group)))
-                         (lock (task-group-lock group)))
-                     (bt:with-lock-held (lock)
-                       (loop
-                         (case (task-status task)
-                           (:succeeded (return (list :succeeded (task-values task))))
-                           ((:failed :evaporated)
-                            (return (list (task-status task) (task-failure task)))))
-                         (sb-thread:condition-wait (task-group-condition group) lock)))))
-              (evaporate-and-join group)
+                 (if (null *evaporation-target*)
+                     (let ((task (run-task-here (format nil "top-level ~a" name) group thunk root)))
+                       (if (eq (task-status task) :succeeded)
+                           (list :succeeded (task-values task))
+                           (list (task-status task) (task-failure task))))
+                     (unwind-protect
+                          (progn
+                            (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
+                            (let ((task (first (task-group-tasks group)))
+                                  (lock (task-group-lock group)))
+                              (bt:with-lock-held (lock)
+                                (loop
+                                  (case (task-status task)
+                                    (:succeeded (return (list :succeeded (task-values task))))
+                                    ((:failed :evaporated)
+                                     (return (list (task-status task) (task-failure task)))))
+                                  (sb-thread:condition-wait (task-group-condition group) lock)))))
+                       (evaporate-and-join group)))
               (ignore-errors (flush-log)))))
       (destructuring-bind (status payload) decision
         (ecase status
