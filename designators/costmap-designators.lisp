@@ -231,11 +231,18 @@ robot, object or link) is signalled, not turned into a failing goal."
 
 (defun costmap-location-generator (designator)
   "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged
-costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
+costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies or the costmap is 0
+everywhere."
   (let ((costmap (designator-costmap designator)))
     ;; the costmap visualization shows the costmap last sampled (BTR:CLEAR-COSTMAP-VIS-OBJECT)
     (when costmap (btr:add-costmap-function-object costmap))
-    (if costmap (costmap-samples costmap) nil)))
+    ;; a costmap that is 0 everywhere (nothing fits) has no candidates: the designator then
+    ;; has no solution (a DESIGNATOR-ERROR, which plans retry), not a Lisp error
+    (and costmap
+         (handler-case (let ((samples (costmap-samples costmap)))
+                         (cut:lazy-car samples)
+                         samples)
+           (invalid-probability-distribution () nil)))))
 
 (desig:register-location-generator 20 costmap-location-generator
   "Samples of the location costmap of the designator (DESIG-COSTMAP).")
