@@ -101,11 +101,11 @@
             "~s is not in the dishwasher: ~a" type (object-position type))))))
 
 (test the-same-seed-gives-the-same-run
-  (flet ((run ()
+  (flet ((run-once ()
            (btw-tut:init-projection)
            (run-quietly (lambda () (demos:household-demo :object-list '(:bowl) :seed 5)))
            (object-position :bowl)))
-    (let ((a (run)) (b (run)))
+    (let ((a (run-once)) (b (run-once)))
       (is (< (cl-transforms:v-dist a b) 1d-6) "two runs of seed 5 ended apart: ~a ~a" a b))))
 
 (test varied-kitchen-moves-the-dining-table
