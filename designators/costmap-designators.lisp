@@ -214,6 +214,11 @@ every solution contributes and they are merged.  Extendable: add rules that buil
 (defvar *designator-costmaps* (make-hash-table :test 'eq :weakness :key :synchronized t)
   "Location designator -> its merged costmap (or :NONE).")
 
+(defparameter *max-cached-costmaps* 128
+  "How many designators' costmaps *DESIGNATOR-COSTMAPS* keeps: designators live on in task
+trees and recorded runs, so the cache is emptied when it is full rather than when they go (a
+costmap whose designator asks again is built again).")
+
 (defun designator-costmap (designator)
   "The merged costmap of all DESIG-COSTMAP solutions of the location DESIGNATOR, or NIL when it
 has none; computed once per designator.  A Lisp error while a costmap is built (an unknown
@@ -226,6 +231,8 @@ robot, object or link) is signalled, not turned into a failing goal."
                                                     (cut:force-ll
                                                      (prolog `(desig-costmap ,designator ?costmap)))))))
                     (merged (and costmaps (merge-costmaps costmaps))))
+               (when (>= (hash-table-count *designator-costmaps*) *max-cached-costmaps*)
+                 (clrhash *designator-costmaps*))
                (setf (gethash designator *designator-costmaps*) (or merged :none))
                merged)))))
 
