@@ -208,6 +208,8 @@ states); ROBOT is left where it is."
 AFTER (default: where it is now), leaving out the contacts it starts from, arrives at on
 purpose, those of IGNORE-LINKS (link names) and, with IGNORE-ATTACHED, of its carried objects,
 and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not move."
+  (unless (member *sweep-check* '(nil :warn :fail))
+    (projection-error "URDF-PROJ:*SWEEP-CHECK* is ~s, expected NIL, :WARN or :FAIL." *sweep-check*))
   (when *sweep-check*
     (progn
       (unless (same-state-p before after)
