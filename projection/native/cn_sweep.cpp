@@ -35,14 +35,13 @@ struct Sweep {
   int n_ignore = 0;
   double tol = 1e-3;
   bool skip_start = false;
-  btCollisionObject probe, hull_probe;
+  btCollisionObject probe;
   SweptHull hull;
   std::vector<Hit> hits;
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
         skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {
-    hull_probe.setCollisionShape(&hull);
     sync_aabbs(w);
   }
 
@@ -248,9 +247,7 @@ struct Sweep {
       btVector3 lo, hi;
       hull.getAabb(btTransform::getIdentity(), lo, hi);
       if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
-      Closest c(0);
-      w.dw->contactPairTest(&hull_probe, const_cast<btCollisionObject *>(other), c);
-      if (c.found && c.best <= 0) return true;
+      if (convex_distance(&hull, btTransform::getIdentity(), other, 1e-9) <= 0) return true;
     }
     return false;
   }
@@ -263,9 +260,17 @@ struct Sweep {
     return c;
   }
 
-  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther).
+  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther): from GJK
+  // on its pieces, and where that finds a touch, from Bullet's contact query, which also gives
+  // the POINT of contact (the one the discrete checks use).
   double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
                      btVector3 *point = nullptr) {
+    double d = maxd;
+    for (const Piece &p : m.pieces) {
+      d = std::min(d, convex_distance(p.shape, t * p.local, other, d));
+      if (d <= 0) break;
+    }
+    if (d > 0) return d;
     Closest c = distance(m, t, maxd, other);
     if (point) *point = c.point;
     return c.found ? c.best : maxd;
@@ -450,8 +455,8 @@ struct Sweep {
       // apart by d at ta stays apart until ta + d / B
       if (ta >= m.clear_until[c]) {
         double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
-        Closest d0 = distance(m, slot_pose[a], probe_d, other);
-        double d = d0.found ? d0.best : probe_d;
+        btVector3 at_point;
+        double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
         if (ka == 0 && skip_start && d <= tol) {
           m.done[c] = 1;
           continue;
@@ -460,7 +465,7 @@ struct Sweep {
           m.done[c] = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
-          hits.push_back({m.obj, m.link, ob, lb, ta, d0.point});
+          hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
           continue;
         }
         m.clear_until[c] = ta + d / m.B;

@@ -121,5 +121,10 @@ inline void link_chain(const Model &m, int link, std::vector<int> &out) {
   std::reverse(out.begin(), out.end());
 }
 
+// The smallest distance, searched up to MAXD (MAXD when nothing is nearer), between the convex
+// A at TA and the collision object OTHER; <= 0 when they touch (not a penetration depth).
+double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
+                       double maxd);
+
 }  // namespace sweep
 }  // namespace cn
