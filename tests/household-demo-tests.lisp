@@ -95,10 +95,9 @@
     (is (null (btr:attached-objects (btr:get-robot-object))))
     (dolist (joint demos:*household-joints*)
       (is (< (abs (kitchen-joint joint)) 0.1) "~a is still open: ~a" joint (kitchen-joint joint)))
-    (let ((tray (btr:link-pose (btr:get-environment-object) "sink_area_dish_washer_tray_bottom")))
-      (dolist (type types)
-        (is (< (cl-transforms:v-dist (object-position type) (cl-transforms:origin tray)) 0.45)
-            "~s is not in the dishwasher: ~a" type (object-position type))))))
+    (dolist (type types)
+      (is (demos:in-dishwasher-p (object-position type))
+          "~s is not in the dishwasher: ~a" type (object-position type)))))
 
 (test the-same-seed-gives-the-same-run
   (flet ((run-once ()

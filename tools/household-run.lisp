@@ -18,13 +18,11 @@ x and y, drawn from STATE."
   (cl-transforms:origin (btr:link-pose (btr:get-environment-object) link)))
 
 (defparameter *household-end-places*
-  '((:bowl "sink_area_dish_washer_tray_bottom" 0.45d0)
-    (:cup "sink_area_dish_washer_tray_bottom" 0.45d0)
-    (:spoon "sink_area_dish_washer_tray_bottom" 0.45d0)
+  '((:bowl :dishwasher) (:cup :dishwasher) (:spoon :dishwasher)
     (:breakfast-cereal "oven_area_area_right_drawer_board_3_link" 0.3d0)
     (:milk "sink_area_trash_drawer_main" 0.35d0))
-  "(type link metres): where each object must end after cleaning, within that distance of the
-link's origin.")
+  "(type link metres) or (type :dishwasher): where each object must end after cleaning, within
+that distance of the link's origin, or in the dishwasher (DEMOS:IN-DISHWASHER-P).")
 
 (defun household-end-state-problems (object-types)
   "What is wrong with the kitchen after a household demo of OBJECT-TYPES: objects away from
@@ -35,6 +33,9 @@ all is well."
       (let* ((o (btr:object btr:*current-bullet-world* (demos:demo-object-name type)))
              (place (assoc type *household-end-places*)))
         (cond ((null o) (push (format nil "~(~a~) is gone" type) problems))
+              ((and place (eq (second place) :dishwasher))
+               (unless (demos:in-dishwasher-p (cl-transforms:origin (btr:pose o)))
+                 (push (format nil "~(~a~) is not in the dishwasher" type) problems)))
               (place
                (let ((d (cl-transforms:v-dist (cl-transforms:origin (btr:pose o))
                                               (link-position (second place)))))

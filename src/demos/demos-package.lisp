@@ -6,7 +6,7 @@
   (:use :cl)
   (:export #:household-demo #:initialize #:spawn-objects-on-fixed-spots #:park-robot
            #:*object-spawning-poses* #:*household-joints* #:*demo-object-types*
-           #:demo-object-name))
+           #:demo-object-name #:in-dishwasher-p #:*demo-seed*))
 
 (in-package :cram-projection-demos)
 

@@ -146,3 +146,12 @@ are). No failure is caught. Returns the object list."
              (park-robot)))
       (setf btr:*visibility-threshold* threshold)))
   object-list)
+
+(defun in-dishwasher-p (position)
+  "True when POSITION (a map point) lies in the closed dishwasher: within 0.35 m horizontally of
+its frame and below the sink's counter top."
+  (let ((d (cl-transforms:origin (btr:link-pose (kitchen) "sink_area_dish_washer_main"))))
+    (and (< (sqrt (+ (expt (- (cl-transforms:x position) (cl-transforms:x d)) 2)
+                     (expt (- (cl-transforms:y position) (cl-transforms:y d)) 2)))
+            0.35d0)
+         (< (cl-transforms:z position) 0.85d0))))
