@@ -191,6 +191,19 @@ nodes come up (LAUNCH-BLOCK-NODES)."
             (readme-block-section block) (readme-block-language block) ok)
     ok))
 
+(defun fresh-repl-block-p (block)
+  (and block (eq :lisp (readme-block-language block))
+       (uiop:string-prefix-p "(require :asdf)"
+                             (string-left-trim '(#\Space #\Newline) (readme-block-text block)))))
+
+(defun run-readme-blocks (run blocks)
+  "Run BLOCKS in order. A REPL is quit before a launch that a fresh REPL follows, as a user
+starting over does (its node would otherwise go on publishing its belief state's TF)."
+  (loop for (block next) on blocks
+        do (when (and (launch-block-p block) (fresh-repl-block-p next))
+             (end-session run))
+           (run-readme-block run block)))
+
 (test readme-recipes
   (let* ((blocks (readme-blocks))
          (ros-from (position "With ROS" blocks :key #'readme-block-section :test #'string=))
@@ -207,15 +220,13 @@ nodes come up (LAUNCH-BLOCK-NODES)."
                   (cons (format nil "ROS_MASTER_URI=http://127.0.0.1:~d" (free-port))
                         (remove-if (lambda (e) (uiop:string-prefix-p "ROS_MASTER_URI=" e))
                                    (sb-ext:posix-environ)))))
-           (dolist (block (subseq blocks 0 (or ros-from (length blocks))))
-             (run-readme-block run block))
+           (run-readme-blocks run (subseq blocks 0 (or ros-from (length blocks))))
            (end-session run)
            (when ros-from
              (let ((left (call-with-private-ros
                           (lambda ()
                             (setf (readme-run-env run) (readme-environment (private-ros-env *ros*)))
-                            (dolist (block (subseq blocks ros-from))
-                              (run-readme-block run block))
+                            (run-readme-blocks run (subseq blocks ros-from))
                             (end-session run)))))
                (is (null left) "processes left running after the README's ROS blocks: ~s" left))))
       (end-session run)

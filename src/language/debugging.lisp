@@ -41,12 +41,11 @@ ABORT-PLAN."))
   "Enter the debugger for CONDITION in the thread of TASK (the current task), at the signalling
 frame. Returns when the user picks CONTINUE (described by CONTINUE-REPORT); the restart
 ABORT-PLAN stops the plan and unwinds this task."
-  (progn
-    (restart-case (with-simple-restart (continue "~a" continue-report)
-                    (invoke-debugger condition))
-      (abort-plan ()
-        :report "Abort the plan: stop every task of it; its top-level call signals PLAN-ABORTED."
-        (stop-plan-from-task task)))))
+  (restart-case (with-simple-restart (continue "~a" continue-report)
+                  (invoke-debugger condition))
+    (abort-plan ()
+      :report "Abort the plan: stop every task of it; its top-level call signals PLAN-ABORTED."
+      (stop-plan-from-task task))))
 
 (defun abort-plan (&optional condition)
   "Invoke the restart ABORT-PLAN (of the debugger inside a task, see *DEBUG-ON-LISP-ERRORS*):

@@ -170,7 +170,8 @@ roslisp's threads."
       (gethash (goal-handle-goal-id goal-handle) (cram-ros-pms::action-client-results transport)))))
 
 (defun result (goal-handle)
-  "The result message of the goal (the action's Result type), NIL before it ended."
+  "The result message of the goal (the action's Result type), NIL before it ended (and once
+the client forgot it: it remembers its last CRAM-ROS-PMS::*KEPT-GOALS* goals)."
   (let ((message (result-message (check-goal-handle goal-handle 'result))))
     (and message (cram-ros-pms::message-field message "RESULT"))))
 

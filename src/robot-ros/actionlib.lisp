@@ -132,6 +132,21 @@ otherwise. TIMEOUT NIL does not wait (see SERVER-CONNECTED-P)."
   (setf (action-client-subscribers client) '())
   t)
 
+(defparameter *kept-goals* 256
+  "How many goals an action client remembers: beyond it, the states and results of finished
+goals are forgotten when the next goal is sent, so a long-lived client does not grow.")
+
+(defun forget-finished-goals (client)
+  "Forget the finished goals of CLIENT when it remembers more than *KEPT-GOALS* (under its lock)."
+  (let ((statuses (action-client-statuses client)))
+    (when (> (hash-table-count statuses) *kept-goals*)
+      (loop for id being the hash-keys of statuses using (hash-value entry)
+            when (member (car entry) *terminal-statuses*)
+              collect id into finished
+            finally (dolist (id finished)
+                      (remhash id statuses)
+                      (remhash id (action-client-results client)))))))
+
 (defun send-goal (client goal &key feedback-cb done-cb)
   "Send GOAL (a message of the action's Goal type) to CLIENT's server; returns the goal id.
 FEEDBACK-CB is called with each feedback message of the goal, DONE-CB with its terminal status
@@ -146,6 +161,7 @@ and result message (in roslisp's threads)."
                                     (id goal_id) id
                                     goal goal)))
     (sb-thread:with-recursive-lock ((action-client-lock client))
+      (forget-finished-goals client)
       (setf (gethash id (action-client-statuses client)) (cons :pending ""))
       (when feedback-cb (setf (gethash id (action-client-feedback-callbacks client)) feedback-cb))
       (when done-cb (setf (gethash id (action-client-done-callbacks client)) done-cb)))
