@@ -87,3 +87,10 @@ random state."
              (y (cell-center-y costmap row))
              (heights (generate-heights costmap x y)))
         (cl-transforms:make-3d-vector x y (elt heights (random (length heights) random-state)))))))
+
+(setf (documentation 'cost-functions 'function)
+      "The cost functions of a costmap: entries (name function score), applied by ascending score."
+      (documentation 'height-generators 'function)
+      "The height generators of a costmap, functions (x y) returning lists of heights."
+      (documentation 'orientation-generators 'function)
+      "The orientation generators of a costmap, functions (x y previous-orientations).")

@@ -72,3 +72,7 @@ is itself attached to (items attached to each other may touch)."
         thereis (and held
                      (let ((allowed (cons (name robot) (mapcar #'first (attached-objects held)))))
                        (set-difference (find-objects-in-contact world held) allowed)))))
+
+(setf (documentation 'clear-bullet-world 'function)
+      "Prolog predicate (clear-bullet-world): the current world becomes a new, empty one;
+(clear-bullet-world ?world): ?world is a new, empty world.")
