@@ -18,8 +18,9 @@ PACKAGES := sbcl cl-cffi cl-alexandria cl-fiveam cl-cxml cl-puri cl-ppcre \
   roslisp cl-std-msgs cl-geometry-msgs cl-tf2-msgs cl-sensor-msgs cl-visualization-msgs cl-nav-msgs \
   python3-tf2-msgs python3-nav-msgs python3-visualization-msgs \
   python3-actionlib python3-move-base-msgs python3-trajectory-msgs python3-tf2-ros \
-  cl-actionlib-msgs cl-move-base-msgs cl-trajectory-msgs libtf2-dev libtf2-ros-dev ros-robot-state-publisher joint-state-publisher \
-  rviz xvfb imagemagick x11-apps cl-hunchentoot libjs-three chromium
+  cl-actionlib cl-actionlib-msgs cl-move-base-msgs cl-trajectory-msgs libtf2-dev libtf2-ros-dev ros-robot-state-publisher joint-state-publisher \
+  rviz xvfb imagemagick x11-apps cl-hunchentoot libjs-three chromium \
+  emacs-nox slime cl-swank
 BENCH_PACKAGES := swi-prolog-nox
 SLURM_PACKAGES := slurm-wlm munge
 

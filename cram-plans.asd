@@ -4,7 +4,8 @@
 ;; Debian's cxml.asd defines several primary systems in one file: ASDF 3.3 re-reads it, warns
 ;; and prints closure-common's character checks each time one of them is looked up.  Load cxml
 ;; once, quietly, and register it and its parts as immutable, so ASDF neither re-reads nor
-;; re-plans them (nor recompiles what depends on them).
+;; re-plans them (nor recompiles what depends on them).  (The end of this file keeps the load
+;; of cxml from counting as a dependency of this file's definitions.)
 (unless (asdf:component-loaded-p "cxml")
   (let ((*standard-output* (make-broadcast-stream)))
     (handler-bind ((warning #'muffle-warning))
@@ -12,6 +13,24 @@
   (dolist (name '("cxml" "cxml-xml" "cxml-dom" "cxml-klacks" "closure-common"))
     (when (asdf:find-system name nil)
       (asdf:register-immutable-system name))))
+
+;; Debian's hunchentoot.asd and flexi-streams.asd also define test systems of other names, and
+;; ASDF warns each time it reads them (the viewer, part of `cram-plans', loads hunchentoot).
+;; Read them once, quietly.
+(dolist (name '("flexi-streams" "hunchentoot"))
+  (unless (asdf:registered-system name)
+    (let ((file (nth-value 2 (asdf:locate-system name))))
+      (when file
+        (handler-bind ((warning #'muffle-warning))
+          (asdf:load-asd file :name name))))))
+
+;; The compiler's optimization notes on this project's files are for its developers, not for a
+;; user's first build: every system of this file compiles its files through this function (set
+;; at the end of the file; warnings still show).
+(defun cram-plans-compile-quietly (thunk)
+  "Call THUNK, a compilation, muffling the compiler's optimization notes."
+  (handler-bind ((sb-ext:compiler-note #'muffle-warning))
+    (funcall thunk)))
 
 ;; Debian installs roslisp under /usr/share/roslisp/ and its message systems under
 ;; /usr/share/common-lisp/ros/, outside ASDF's default registry.  Find systems there as a last
@@ -39,7 +58,9 @@
 (unless (member 'cram-plans-find-ros-system asdf:*system-definition-search-functions*)
   (setf asdf:*system-definition-search-functions*
         (append asdf:*system-definition-search-functions* '(cram-plans-find-ros-system))))
-(when (asdf:find-system "roslisp" nil)
+;; (Asked of the search function, not of FIND-SYSTEM: a system looked up while this file loads
+;; becomes a dependency of its definitions.)
+(when (or (cram-plans-find-ros-system "roslisp") (asdf:registered-system "roslisp"))
   (pushnew :cram-plans-roslisp *features*))
 
 (defsystem "cram-plans/cram-utilities"
@@ -102,6 +123,7 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "native-world")
                (:file "native-robot")
                (:file "native-query")
+               (:file "native-sweep")
                (:file "native-render")
                (:file "native-ik")))
 
@@ -121,6 +143,8 @@ points in polygons (package CRAM-MATH, CMA)."
   :components ((:file "package")
                (:file "logging")
                (:file "conditions")
+               (:file "debugging")
+               (:file "implementation-package")
                (:file "task-tree")
                (:file "tasks")
                (:file "failures")
@@ -174,6 +198,10 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "costmap-belief")
                (:file "costmap-targets")
                (:file "costmap-designators")
+               (:file "costmap-household-bodies")
+               (:file "costmap-household-regions")
+               (:file "costmap-household-relations")
+               (:file "costmap-household-robot")
                (:file "costmap-heatmap")))
 
 (defsystem "cram-plans/cram-pr2-description"
@@ -218,6 +246,7 @@ predicates, headless pictures and visibility (BTR), tutorial helpers (BTR-UTILS)
   :serial t
   :components ((:file "package")
                (:file "urdf")
+               (:file "urdf-tree")
                (:file "urdf-writer")
                (:file "world")
                (:file "objects")
@@ -252,6 +281,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :components ((:file "package")
                (:file "robot")
                (:file "tf")
+               (:file "sweep")
                (:file "low-level-base")
                (:file "ik")
                (:file "ik-solver")
@@ -269,10 +299,14 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                "cram-plans/cram-pr2-description" "cram-plans/cram-pepper-description"
                "cram-plans/cram-designators" "cram-plans/cram-executive" "cram-plans/cram-bullet-reasoning"
                "cram-plans/cram-common-designators" "cram-plans/cram-urdf-projection"
-               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-household-knowledge"
+               "cram-plans/cram-mobile-pick-place-plans"
+               "cram-plans/cram-urdf-environment-manipulation"
+               "cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-projection-demos"
                "cram-plans/ros-load" "cram-plans/roslisp-utilities" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo"
-               "cram-plans/compat" "cram-plans/replay" "cram-plans/cram-ros-pms/package"
-               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")))
+               "cram-plans/compat" "cram-plans/replay" "cram-plans/viewer" "cram-plans/cram-ros-pms/package"
+               (:feature :cram-plans-roslisp "cram-plans/roslisp-utilities/ros")
+               (:feature :cram-plans-roslisp "cram-plans/cram-urdf-environment-manipulation/ros")))
 
 (defsystem "cram-plans/cram-ros-pms/package"
   :description "The light part of the robot process modules: package CRAM-ROS-PMS (PR2-PMS),
@@ -294,6 +328,8 @@ belief state following /joint_states and TF."
   :serial t
   :components ((:file "connection")
                (:file "actionlib")
+               (:file "actionlib-api")
+               (:file "actionlib-simple-client")
                (:file "robot")
                (:file "motions")
                (:file "process-modules")
@@ -310,6 +346,7 @@ each motion, replays written to disk, and BTR:VIEWER / BTR:DEBUG-WINDOW, which l
   :components ((:file "package")
                (:file "scene")
                (:file "recorder")
+               (:file "sweeps")
                (:file "export")
                (:file "entry")
                (:static-file "viewer.js")
@@ -430,7 +467,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "language-tree-tests")
                (:file "cpl-api-tests")
                (:file "cpl-tasks-tests")
-               (:file "cram-walker-tests")))
+               (:file "cram-walker-tests")
+               (:file "language-quiet-log-tests")))
 
 (defsystem "cram-plans/tests/robots"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-robot-interfaces" "cram-plans/cram-location-costmap"
@@ -486,7 +524,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/cram-pepper-description")
   :pathname "tests/"
   :serial t
-  :components ((:file "urdf-proj-tests")))
+  :components ((:file "urdf-proj-tests")
+               (:file "urdf-proj-ik-fallback-tests")))
 
 (defsystem "cram-plans/tests/costmap"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-location-costmap" "cram-plans/cram-pr2-description")
@@ -525,7 +564,17 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "cram-plans/tests/ros" "cram-plans/tests/urdf-proj"
                "cram-plans/tests/plans" "cram-plans/tests/runner" "cram-plans/tests/compat" "cram-plans/tests/seeds"
                "cram-plans/tests/bad-input" "cram-plans/tests/readme" "cram-plans/tests/robot-ros"
-               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"))
+               "cram-plans/tests/environment-manipulation" "cram-plans/tests/environment-manipulation-ros"
+               "cram-plans/tests/household" "cram-plans/tests/fetch-deliver" "cram-plans/tests/household-demo"
+               "cram-plans/tests/viewer-report" "cram-plans/tests/cram-math"
+               "cram-plans/tests/repl" "cram-plans/tests/actionlib" "cram-plans/tests/sweep"))
+
+(defsystem "cram-plans/tests/sweep"
+  :description "Sweep checks between key poses: the shim's call and the motions' *SWEEP-CHECK*."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
+               "cram-plans/cram-bullet-world-tutorial" "cram-plans/replay")
+  :pathname "tests/"
+  :components ((:file "sweep-tests")))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."
@@ -533,6 +582,23 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                "sb-posix")
   :pathname "tests/"
   :components ((:file "robot-ros-tests")))
+
+(defsystem "cram-plans/tests/repl"
+  :description "A user's day at the REPL: a swank server and a client speaking SLIME's protocol,
+reloads, the debugger inside plans, logging."
+  :depends-on ("cram-plans/tests/base" "cram-plans" "sb-posix" "sb-bsd-sockets")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "swank-client")
+               (:file "repl-tests")
+               (:file "repl-debugger-tests")))
+
+(defsystem "cram-plans/tests/actionlib"
+  :description "CRAM's actionlib client and the example gripper process module against a rospy
+action server on a private ROS master."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-ros-pms" "actionlib-msg")
+  :pathname "tests/"
+  :components ((:file "actionlib-tests")))
 
 (defsystem "cram-plans/tests/readme"
   :description "The README's lisp and sh blocks, verbatim, in fresh SBCLs and bash."
@@ -570,11 +636,25 @@ grasps, gripper openings and efforts, pick and place trajectories."
   :components ((:file "manipulation-interfaces")
                (:file "object-knowledge")))
 
+(defsystem "cram-plans/cram-household-knowledge"
+  :description "Household object knowledge (OBJECTS, MAN-INT): the kitchen's object types,
+their grasps with pregrasp and lift per location type, carry configurations, and where objects
+are likely to be and where they go per context (GET-OBJECT-LIKELY-LOCATION,
+GET-OBJECT-DESTINATION)."
+  :depends-on ("cram-plans/cram-object-knowledge" "cram-plans/cram-designators" "cram-plans/cl-transforms")
+  :pathname "src/object-knowledge/"
+  :serial t
+  :components ((:file "household-types")
+               (:file "household-grasps")
+               (:file "knowledge-dispatch")
+               (:file "household-locations")))
+
 (defsystem "cram-plans/cram-mobile-pick-place-plans"
   :description "Action groundings and plans of mobile pick and place (PP-PLANS)."
   :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms" "cram-plans/cram-designators"
                "cram-plans/cram-language" "cram-plans/cram-common-failures" "cram-plans/cram-executive"
-               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge")
+               "cram-plans/cram-robot-interfaces" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-object-knowledge"
+               "cram-plans/cram-household-knowledge" "cram-plans/cram-urdf-projection")
   :pathname "src/plans/"
   :serial t
   :components ((:file "pp-package")
@@ -611,7 +691,119 @@ bottles."
                (:file "pepper-plans")
                (:file "pepper-search")))
 
+(defsystem "cram-plans/cram-fetch-deliver-plans"
+  :description "The household action layer (FD-PLANS): navigating, turning towards, searching,
+fetching, delivering and transporting, with CRAM's retries and projection pre-checks."
+  :depends-on ("cram-plans/cram-mobile-pick-place-plans" "cram-plans/cram-location-costmap"
+               "cram-plans/cram-urdf-projection" "cram-plans/cram-household-knowledge"
+               "cram-plans/cram-urdf-environment-manipulation")
+  :pathname "src/fetch-deliver/"
+  :serial t
+  :components ((:file "fd-package")
+               (:file "fd-occasions")
+               (:file "fd-prechecks")
+               (:file "fd-navigation")
+               (:file "fd-search")
+               (:file "fd-fetch")
+               (:file "fd-deliver")
+               (:file "fd-transport")
+               (:file "fd-groundings")))
+
+(defsystem "cram-plans/cram-projection-demos"
+  :description "CRAM's household demo in projection (DEMOS): set a breakfast table from closed
+containers, then clean it up."
+  :depends-on ("cram-plans/cram-fetch-deliver-plans" "cram-plans/cram-bullet-world-tutorial")
+  :pathname "src/demos/"
+  :serial t
+  :components ((:file "demos-package")
+               (:file "varied-kitchen")
+               (:file "household-demo")))
+
+(defsystem "cram-plans/tests/fetch-deliver"
+  :description "Searching, fetching, delivering and transporting (FD-PLANS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-fetch-deliver-plans"
+               "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :components ((:file "fetch-deliver-tests")))
+
+(defsystem "cram-plans/tests/household-demo"
+  :description "CRAM's household demo in projection (DEMOS)."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-projection-demos")
+  :pathname "tests/"
+  :components ((:file "household-demo-tests")))
+
+(defsystem "cram-plans/tests/household"
+  :description "Household object knowledge and location designators in the kitchen."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial")
+  :pathname "tests/"
+  :serial t
+  :components ((:file "household-knowledge-tests")
+               (:file "household-locations-tests")))
+
 (defsystem "cram-plans/tests/plans"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial" "cram-plans/cram-pepper-demo")
   :pathname "tests/"
   :components ((:file "plans-tests") (:file "plans-placing-tests") (:file "scene-layout-tests")))
+
+;;; Environment manipulation: drawers, doors and what is inside them.
+
+(defsystem "cram-plans/cram-urdf-environment-manipulation"
+  :description "Opening, closing, accessing and sealing the drawers and doors of an articulated
+environment, container events and attachments in the belief state, the container occasions
+(ENV-MAN)."
+  :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cl-transforms"
+               "cram-plans/cram-designators" "cram-plans/cram-language" "cram-plans/cram-common-failures"
+               "cram-plans/cram-executive" "cram-plans/cram-robot-interfaces"
+               "cram-plans/cram-bullet-reasoning" "cram-plans/cram-native" "cram-plans/cram-urdf-projection"
+               "cram-plans/cram-object-knowledge" "cram-plans/cram-mobile-pick-place-plans")
+  :pathname "src/environment-manipulation/"
+  :serial t
+  :components ((:file "package")
+               (:file "container-types")
+               (:file "containers")
+               (:file "trajectories")
+               (:file "base-poses")
+               (:file "belief")
+               (:file "occasions")
+               (:file "plans")
+               (:file "access-seal")
+               (:file "groundings")))
+
+(defsystem "cram-plans/cram-urdf-environment-manipulation/ros"
+  :description "The environment's joint states on kitchen/cram_joint_states after container
+events, while a ROS node runs."
+  :depends-on ("cram-plans/cram-urdf-environment-manipulation" "cram-plans/roslisp-utilities/ros"
+               "roslisp" "sensor_msgs-msg" "std_msgs-msg")
+  :pathname "src/environment-manipulation/"
+  :components ((:file "ros-joint-states")))
+
+(defsystem "cram-plans/tests/environment-manipulation"
+  :description "Drawers and doors: grounding, distances, trajectories, the belief state, goals,
+attachments and the plans of opening, closing, accessing and sealing."
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-world-tutorial"
+               "cram-plans/cram-urdf-environment-manipulation" "cram-plans/replay")
+  :pathname "tests/"
+  :components ((:file "environment-manipulation-tests")))
+
+(defsystem "cram-plans/tests/environment-manipulation-ros"
+  :description "Environment manipulation with a ROS node: the kitchen's joint states on ROS."
+  :depends-on ("cram-plans/tests/environment-manipulation" "cram-plans/tests/ros"
+               "cram-plans/cram-urdf-environment-manipulation/ros")
+  :pathname "tests/"
+  :components ((:file "environment-manipulation-ros-tests")))
+
+;;; Every system of this file compiles through CRAM-PLANS-COMPILE-QUIETLY.
+(dolist (name (asdf:registered-systems))
+  (when (or (string= name "cram-plans") (uiop:string-prefix-p "cram-plans/" name))
+    (reinitialize-instance (asdf:registered-system name)
+                           :around-compile 'cram-plans-compile-quietly)))
+
+;;; Loading cxml and reading hunchentoot.asd at the top of this file made ASDF record them as
+;;; dependencies of this file's definitions; outside a LOAD-SYSTEM an immutable system counts as
+;;; not done, so the next FIND-SYSTEM (e.g. SYSTEM-RELATIVE-PATHNAME) would read this file again
+;;; and redefine, and so reload, every system in it.  Nothing in this file depends on them.
+(let ((system (asdf:registered-system "cram-plans")))
+  (when system
+    (setf (asdf/system:definition-dependency-list system) '())
+    (let ((set (asdf/system:definition-dependency-set system)))
+      (when (hash-table-p set) (clrhash set)))))

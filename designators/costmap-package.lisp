@@ -43,5 +43,9 @@
    #:robot-pose-collisions #:robot-pose-distance-validator
    #:robot-pose-visibility-validator #:robot-pose-collision-validator
    #:line-of-sight-p #:robot-camera-height
+   ;; household locations
+   #:kitchen-restricted-area #:*restricted-area-function* #:*attachments* #:*in-height-above-bottom*
+   #:*table-setting-paddings* #:*slot-sizes* #:*slot-deviation* #:*relation-keys*
+   #:container-level-link #:level-links
    ;; pictures
    #:costmap-heat-map-png #:costmap-heat-map-image))

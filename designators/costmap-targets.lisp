@@ -63,6 +63,7 @@ object, or the reference of its LOCATION property."
           ((and data (ignore-errors (desig:object-pose data)))
            (values (cl-transforms:origin (pose-in-map (desig:object-pose data) "object pose")) nil))
           (location (location-designator-target location))
+          ((desig:desig-prop-value designator :urdf-name) (environment-part-target designator))
           (t (error "The object designator ~a does not name an object of the belief state ~
                      (by NAME, TYPE or perceived data; objects: ~{~s~^ ~}) and has no LOCATION."
                     designator (btr:object-names world))))))

@@ -157,9 +157,15 @@ detail)."
   (and (eq :sh (readme-block-language block))
        (uiop:string-prefix-p "roslaunch " (string-left-trim " " (readme-block-text block)))))
 
+(defun launch-block-nodes (block)
+  "The nodes whose start shows that BLOCK's launch is up: the map server, and the simulated robot
+for launch/sim_robot.launch."
+  (cons "/map_server"
+        (and (search "sim_robot.launch" (readme-block-text block)) (list "/sim_robot"))))
+
 (defun run-launch-block (run block)
   "Start the roslaunch of BLOCK in the background, replacing the previous launch; ok when its
-map server comes up."
+nodes come up (LAUNCH-BLOCK-NODES)."
   (let ((old (readme-run-launch run)))
     (when old
       (stop-process old)
@@ -169,7 +175,9 @@ map server comes up."
                     (list "-c" (readme-block-text block)))
     (setf (readme-run-launch run) p)
     (let ((ok (wait-until 60 (lambda () (and (sb-ext:process-alive-p p)
-                                             (member "/map_server" (rosnode-list) :test #'string=)))
+                                             (let ((nodes (rosnode-list)))
+                                               (every (lambda (node) (member node nodes :test #'string=))
+                                                      (launch-block-nodes block)))))
                           0.5)))
       (values ok (tail (file-text log))))))
 

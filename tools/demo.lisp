@@ -11,6 +11,7 @@
     (asdf:load-asd (truename (merge-pathnames "cram-plans.asd" root)))
     (asdf:load-system "cram-plans/cram-bullet-world-tutorial")
     (asdf:load-system "cram-plans/cram-pepper-demo")
+    (asdf:load-system "cram-plans/cram-projection-demos")
     (asdf:load-system "cram-plans/replay")   ; runs recorded; --out writes replay.html
     (asdf:load-system "yason")
     (require :sb-posix)))
@@ -36,28 +37,27 @@
                               (cl-transforms:origin btw-tut:*final-object-destination*))
         most-positive-double-float)))
 
-(defun count-occurrences (needle text)
-  "How many times NEEDLE occurs in TEXT (strings), overlapping occurrences included."
-  (let ((needle (coerce needle '(simple-array character (*))))
-        (text (coerce text '(simple-array character (*)))))
-    (declare (type (simple-array character (*)) needle text) (optimize speed))
-    (let ((m (length needle)) (n (length text)))
-      (if (zerop m)
-          (1+ n)
-          (let ((first (schar needle 0)))
-            (loop for i of-type fixnum from 0 to (- n m)
-                  count (and (char= first (schar text i))
-                             (loop for j of-type fixnum from 1 below m
-                                   always (char= (schar needle j) (schar text (+ i j)))))))))))
+(defparameter *recovery-lines*
+  '((:look-direction :warn "PERCEPTION-FAILURE") (:new-grasp :info "TRYING-NEW-GRASP")
+    (:new-arm :info "TRYING-NEW-ARM") (:grasp-failure :warn "GRASP-FAILURE")
+    (:perception-failure :warn "PERCEPTION-FAILURE"))
+  "(key level tag): a move-bottle run's recovery or failure KEY counts its log lines of LEVEL
+tagged (TAG): `Turning head.', `Trying to grasp from', `Trying the … arm', `[(GRASP-FAILURE)
+WARN]', `[(PERCEPTION-FAILURE) WARN]'.")
 
-(defun parse-log (text)
-  "Counts of the recoveries and failures a move-bottle log shows."
-  (flet ((count-of (needle) (count-occurrences needle text)))
-    (list :look-direction (count-of "Turning head.")
-          :new-grasp (count-of "Trying to grasp from")
-          :new-arm (count-of "Trying the ")
-          :grasp-failure (count-of "[(GRASP-FAILURE) WARN]")
-          :perception-failure (count-of "[(PERCEPTION-FAILURE) WARN]"))))
+(defun recovery-counts (tally)
+  "The plist of recovery and failure counts of a run whose log lines CPL:*LOG-TALLY* counted
+in TALLY."
+  (loop for (key level tag) in *recovery-lines*
+        collect key
+        collect (let ((n 0))
+                  (maphash (lambda (line count)
+                             (destructuring-bind (l &rest tags) line
+                               (when (and (eq l level) tags (null (cdr tags)) (symbolp (car tags))
+                                          (string= tag (symbol-name (car tags))))
+                                 (incf n count))))
+                           tally)
+                  n)))
 
 (defvar *preparsed-urdfs* '()
   "(text . robot) pairs: URDF texts and what CL-URDF:PARSE-URDF made of them when the saved
@@ -86,32 +86,48 @@ the URDFs parsed when the saved core was built."
       (btw-tut:init-projection)
       (call-with-preparsed-urdfs #'btw-tut:init-projection)))
 
+(defun monotonic-seconds ()
+  "Seconds on the system's monotonic clock, to the nanosecond (SBCL's internal real time
+advances in steps of a few milliseconds)."
+  (multiple-value-bind (seconds nanoseconds) (sb-unix::clock-gettime 1)   ; CLOCK_MONOTONIC
+    (+ seconds (* nanoseconds 1d-9))))
+
 (defun run-move-bottle (pose &key out-dir (pictures t) (log-stream *standard-output*) reuse-world)
   "Run move-bottle with the bottle at POSE in a fresh belief state (with REUSE-WORLD, a copy of
 the one this process made first: see RESET-PROJECTION). Returns a plist: :success, :distance,
-:seconds, :error, the recovery counts of the log, and :log."
+:seconds, :error, the recovery counts of the log (*RECOVERY-LINES*), and :log, the log's text
+\(NIL when LOG-STREAM discards everything, a broadcast stream without components: then the log
+is neither formatted nor kept)."
   (if reuse-world (reset-projection) (btw-tut:init-projection))
   (let* ((btr:*snapshot-directory* (and pictures out-dir (namestring out-dir)))
-         (captured (make-string-output-stream))
-         (stream (make-broadcast-stream captured log-stream))
-         (start (get-internal-real-time))
+         ;; a log that goes nowhere is not captured either: nobody formats its lines
+         (quiet (and (typep log-stream 'broadcast-stream)
+                     (null (broadcast-stream-streams log-stream))))
+         (captured (and (not quiet) (make-string-output-stream)))
+         (stream (if quiet log-stream (make-broadcast-stream captured log-stream)))
+         (tally (make-hash-table :test 'equal))
+         (start (monotonic-seconds))
+         (sweeps 0)
          (error nil))
     (when (and pictures out-dir)
       (btw-tut::spawn-bottle pose)
       (btr:png-snapshot (merge-pathnames "start.png" out-dir) :look-at '(-1.5 -0.7 0.8)))
-    (let ((cpl:*log-stream* stream))
+    (let ((cpl:*log-stream* stream) (cpl:*log-tally* tally)
+          (urdf-proj:*sweep-hooks* (cons (lambda (sweep) (declare (ignore sweep)) (incf sweeps))
+                                         urdf-proj:*sweep-hooks*)))
       (handler-case
           (progn
             (btw-tut:move-bottle pose))
         (error (e) (setf error (princ-to-string e)))))
-    (let* ((seconds (/ (- (get-internal-real-time) start) internal-time-units-per-second))
+    (let* ((seconds (- (monotonic-seconds) start))
            (distance (distance-to-destination))
-           (log (get-output-stream-string captured)))
+           (log (and captured (get-output-stream-string captured))))
       (append (list :success (and (null error) (<= distance *tolerance*))
                     :distance (if (< distance 1d6) distance nil)
                     :seconds (float seconds 1d0)
-                    :error error)
-              (parse-log log)
+                    :error error
+                    :sweeps sweeps)
+              (recovery-counts tally)
               (list :log log)))))
 
 (defmethod coe:on-event grasped-snapshot ((event cpoe:object-attached-robot))
@@ -152,4 +168,5 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
 
 ;; one compilation unit: runner.lisp calls functions it defines further down
 (with-compilation-unit ()
-  (load (merge-pathnames "runner.lisp" *tools-directory*)))
+  (load (merge-pathnames "runner.lisp" *tools-directory*))
+  (load (merge-pathnames "household-run.lisp" *tools-directory*)))

@@ -15,15 +15,17 @@
   (error 'usage-error :message (apply #'format nil fmt args)))
 
 (defparameter *usage*
-  "usage: cram-plans-run [--demo move-bottle|switch-bottles|pepper] [--seed N]
+  "usage: cram-plans-run [--demo move-bottle|switch-bottles|pepper|household] [--seed N]
                       [--bottle-pose x,y,z[,yaw]] [--input \"1 1\"] [--out DIR] [--quiet]
-       cram-plans-run --batch N [--seed N] [--jobs J] [--shard I/N] [--results FILE]
+       cram-plans-run [--demo household] --batch N [--seed N] [--jobs J] [--shard I/N] [--results FILE]
                       [--memory-every K]
        cram-plans-run --summary FILE...
        cram-plans-run --help
 
 Single runs (default: --demo move-bottle, bottle in view):
-  --demo NAME         move-bottle, switch-bottles or pepper
+  --demo NAME         move-bottle, switch-bottles, pepper or household (CRAM's household demo:
+                      set the breakfast table, then clean it up; with --seed, spawn poses
+                      jittered and the kitchen varied)
   --seed N            seed of every random choice (default 1)
   --bottle-pose P     move-bottle's bottle at x,y,z[,yaw] (metres, radians)
   --input TEXT        what the pepper demo reads from the user (default \"2\")
@@ -32,7 +34,8 @@ Single runs (default: --demo move-bottle, bottle in view):
   --speed S           time factor of the simulated robot with --robot ros (default 1)
   --out DIR           write the log's pictures, start/grasped/placed.png and the task tree
   --quiet             no log on standard output
-Batch campaigns of randomized move-bottle runs (one JSON line per run, in index order):
+Batch campaigns of randomized move-bottle runs, or household runs with --demo household (one
+JSON line per run, in index order):
   --batch N           N runs; the same seed gives the same runs however they are split
   --jobs J            worker processes (default 2); a worker that dies is reported with its
                       exit status and last output, and its lost runs are re-run
@@ -72,8 +75,10 @@ Exit status: 0 success, 1 plan failure, 2 bad options.")
                (flet ((value () (if args (pop args) (usage-fail "~a needs a value" option))))
                  (cond ((string= option "--demo")
                         (let ((d (value)))
-                          (unless (member d '("move-bottle" "switch-bottles" "pepper") :test #'string=)
-                            (usage-fail "--demo ~s is unknown, expected move-bottle, switch-bottles or pepper" d))
+                          (unless (member d '("move-bottle" "switch-bottles" "pepper" "household")
+                                          :test #'string=)
+                            (usage-fail "--demo ~s is unknown, expected move-bottle, switch-bottles, ~
+                                         pepper or household" d))
                           (setf (getf options :demo) d)))
                        ((string= option "--seed") (setf (getf options :seed) (parse-integer-option option (value))))
                        ((string= option "--bottle-pose") (setf (getf options :pose) (parse-pose-option (value))))
@@ -131,7 +136,17 @@ any yaw), drawn from SEED."
   '("look_direction" "new_grasp" "new_arm" "grasp_failure" "perception_failure")
   "The JSON keys of the recovery and failure counts of a run.")
 
+(defvar *campaign-demo* "move-bottle"
+  "The demo a campaign's runs run: \"move-bottle\" or \"household\".")
+
 (defun run-record (campaign-seed index)
+  "Run number INDEX of the campaign CAMPAIGN-SEED (move-bottle, or the household demo when
+*CAMPAIGN-DEMO* says so); a hash table for one JSON line."
+  (if (string= *campaign-demo* "household")
+      (household-run-record campaign-seed index)
+      (move-bottle-run-record campaign-seed index)))
+
+(defun move-bottle-run-record (campaign-seed index)
   "Run move-bottle number INDEX of the campaign CAMPAIGN-SEED; a hash table for one JSON line."
   (let ((seed (run-seed campaign-seed index)))
     (multiple-value-bind (pose numbers) (random-bottle-pose seed)
@@ -146,7 +161,8 @@ any yaw), drawn from SEED."
               (gethash "distance" record) (getf result :distance)
               (gethash "seconds" record) (getf result :seconds)
               (gethash "error" record) (let ((e (getf result :error)))
-                                         (and e (first-line e))))
+                                         (and e (first-line e)))
+              (gethash "sweeps" record) (getf result :sweeps 0))
         (loop for key in '(:look-direction :new-grasp :new-arm :grasp-failure :perception-failure)
               for name in *recovery-keys*
               do (setf (gethash name record) (getf result key)))
@@ -159,11 +175,13 @@ any yaw), drawn from SEED."
         (record (make-hash-table :test 'equal)))
     (setf (gethash "index" record) index
           (gethash "seed" record) seed
-          (gethash "pose" record) (nth-value 1 (random-bottle-pose seed))
+          (gethash "pose" record) (and (string= *campaign-demo* "move-bottle")
+                                       (nth-value 1 (random-bottle-pose seed)))
           (gethash "success" record) nil
           (gethash "distance" record) nil
           (gethash "seconds" record) 0
-          (gethash "error" record) message)
+          (gethash "error" record) message
+          (gethash "sweeps" record) 0)
     (dolist (key *recovery-keys*) (setf (gethash key record) 0))
     record))
 
@@ -215,12 +233,13 @@ worker that reaches it. A line on standard output announces it."
       (let ((*read-eval* nil)) (read s)))))
 
 (defun worker (campaign-seed indices-file results-file
-               &key (slot 0) (generation 0) memory-every memory-file)
+               &key (slot 0) (generation 0) memory-every memory-file (demo *campaign-demo*))
   "The body of one worker process: run the campaign runs listed in INDICES-FILE in order,
 appending one JSON line per run to RESULTS-FILE (a run that signals outside the plan is
 recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0.
 Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECORD-RUNS*)."
-  (setf cram-viewer:*record-runs* nil)
+  (setf cram-viewer:*record-runs* nil
+        *campaign-demo* demo)
   (with-open-file (out results-file :direction :output :if-exists :append :if-does-not-exist :create)
     (loop for i in (read-indices indices-file)
           for done from 1
@@ -322,9 +341,10 @@ from one and the file is still there, else loading DEMO (tools/demo.lisp) as bef
             (sb-ext:run-program
              "sbcl" (append (worker-image-options demo)
                             (list "--eval" (format nil "(cram-plans-demo::worker ~d ~s ~s :slot ~d :generation ~d ~
-                                                        :memory-every ~s :memory-file ~s)"
+                                                        :memory-every ~s :memory-file ~s :demo ~s)"
                                                    seed (file "indices") (file "jsonl") (slot-id slot)
-                                                   (slot-generation slot) memory-every (file "memory"))))
+                                                   (slot-generation slot) memory-every (file "memory")
+                                                   *campaign-demo*)))
              :search t :wait nil :input nil :output (file "log") :if-output-exists :supersede
              :error :output :environment (worker-environment))))))
 
@@ -507,6 +527,17 @@ success rate."
             (total (reduce #'+ records :key (lambda (r) (or (gethash key r) 0)))))
         (format stream "  ~20a ~5d / ~5d  ~a~%" key runs total
                 (make-string (if (zerop n) 0 (round (* 30 runs) n)) :initial-element #\#))))
+    (let ((types (make-hash-table :test 'equal)))
+      (dolist (r records)
+        (let ((f (gethash "failure" r)))
+          (when (stringp f) (incf (gethash f types 0)))))
+      (when (plusp (hash-table-count types))
+        (format stream "failure types:~%")
+        (maphash (lambda (f c) (format stream "  ~5d  ~a~%" c f)) types)))
+    (let ((swept (count-if (lambda (r) (plusp (or (gethash "sweeps" r) 0))) records))
+          (total (reduce #'+ records :key (lambda (r) (or (gethash "sweeps" r) 0)))))
+      (format stream "sweeps (motions whose path hits something): ~d in ~d runs, ~,2f per run~%"
+              total swept (if (zerop n) 0 (/ total n))))
     (format stream "failures:~%")
     (if (zerop (hash-table-count errors))
         (format stream "  none~%")
@@ -532,6 +563,12 @@ success rate."
                  (format t "~&replay: ~a~%" (cram-viewer:write-replay dir)))
                (format t "~&~:[FAILURE~;SUCCESS~]: bottle ~@[~,3f m~] from the destination~@[; error: ~a~]~%"
                        (getf result :success) (getf result :distance) (getf result :error))
+               (getf result :success)))
+            ((string= (getf options :demo) "household")
+             (let ((result (run-household (getf options :seed) :log-stream log)))
+               (format t "~&~:[FAILURE~;SUCCESS~]: household demo in ~,2f s~@[ (~a)~]~@[: ~a~]~%"
+                       (getf result :success) (getf result :seconds) (getf result :failure)
+                       (getf result :error))
                (getf result :success)))
             ((string= (getf options :demo) "switch-bottles")
              (btw-tut:init-projection)
@@ -564,6 +601,9 @@ success rate."
                            (summarize (read-json-lines (getf options :summary)))
                            0)
                           ((getf options :batch)
+                           (setf *campaign-demo* (getf options :demo))
+                           (unless (member *campaign-demo* '("move-bottle" "household") :test #'string=)
+                             (usage-fail "--batch runs move-bottle or household, not ~a" *campaign-demo*))
                            (let ((path (run-batch (getf options :batch) :seed (getf options :seed)
                                                                         :jobs (getf options :jobs)
                                                                         :shard (getf options :shard)

@@ -265,6 +265,11 @@ btTransform object_pose(const Object &o);
 btTransform frame_pose(const Object &o, int link);   // link pose or body pose
 void robot_fk(World &w, Object &o);
 void compute_link_poses(const Object &o, std::vector<btTransform> &out);
+// Link poses of model M for the base pose BASE and joint values Q (mimic joints follow); with
+// NEEDED, only the links marked there (every ancestor of a marked link must be marked too).
+void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
+                        std::vector<btTransform> &out, const std::vector<char> *needed = nullptr);
+double model_joint_value(const Model &m, const std::vector<double> &q, int j);  // mimic applied
 void set_query_all(World &w, bool on);
 void move_attached(World &w, int parent, int depth = 0);
 void robot_new_bodies(World &w, Object &o);

@@ -276,14 +276,23 @@ static inline double joint_value(const Model &m, const std::vector<double> &q, i
   return jm.mimic >= 0 ? jm.mult * q[jm.mimic] + jm.offset : q[j];
 }
 
+double model_joint_value(const Model &m, const std::vector<double> &q, int j) {
+  return joint_value(m, q, j);
+}
+
 void compute_link_poses(const Object &o, std::vector<btTransform> &out) {
-  const Model &m = *o.model;
+  compute_link_poses(*o.model, o.base, o.q, out);
+}
+
+void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
+                        std::vector<btTransform> &out, const std::vector<char> *needed) {
   out.resize(m.links.size());
-  out[m.root] = o.base;
+  out[m.root] = base;
   for (size_t j = 0; j < m.joints.size(); ++j) {
     const JointM &jm = m.joints[j];
+    if (needed && !(*needed)[jm.child]) continue;
     btTransform t = out[jm.parent] * jm.origin;
-    double v = joint_value(m, o.q, (int)j);
+    double v = joint_value(m, q, (int)j);
     switch (jm.type) {
       case CN_JOINT_REVOLUTE:
       case CN_JOINT_CONTINUOUS:

@@ -170,6 +170,31 @@ int cn_ignore_pair(int world, int objA, int linkA, int objB, int linkB, int igno
 int cn_ray_test(int world, const double *from3n, const double *to3n, int n,
                 int *out_hit2n, double *out7n);
 
+/* ---- sweep checks ---------------------------------------------------------------------- */
+/* What a robot passes through on its way from one state to another, not only at the two:
+ * its base moves on a straight line (rotation by slerp) from base_from7 to base_to7 while its
+ * joints (nq = every joint, as cn_robot_get_joints) move linearly from q_from to q_to. Its
+ * links and its rigidly attached objects (and theirs) are checked against every other object
+ * (collision filters and ignored pairs apply); the robot itself and its current poses in the
+ * world are not touched. ignore4: n_ignore records (moving obj, moving link, hit obj, hit link)
+ * that are not reported, -1 = any (an object -1 needs link -1). max_step (> 0): largest summed
+ * rotation (rad) and translation (m) of one sub-step; tolerance (> 0, m): a pair is reported
+ * only where its computed distance is <= 0, and missed only when it never gets deeper than
+ * tolerance. flags: CN_SWEEP_SKIP_START_CONTACTS leaves out pairs within tolerance at the
+ * start (the move leaves from that contact).
+ * Records, each pair once at its first contact, earliest first: ints (moving obj, moving link
+ * (-1 for a body), hit obj, hit link); doubles (fraction of the move in [0, 1], contact point
+ * x y z). -> number of pairs (at most cap written) */
+#define CN_SWEEP_SKIP_START_CONTACTS 1
+int cn_robot_sweep_check(int world, int robot, const double *base_from7, const double *q_from,
+                         const double *base_to7, const double *q_to, int nq,
+                         const int *ignore4, int n_ignore, double max_step, double tolerance,
+                         int flags, int *out4, double *out4d, int cap);
+/* The same for a body (and the bodies rigidly attached to it) moving from from7 to to7. */
+int cn_body_sweep_check(int world, int body, const double *from7, const double *to7,
+                        const int *ignore4, int n_ignore, double max_step, double tolerance,
+                        int flags, int *out4, double *out4d, int cap);
+
 /* ---- attachments ------------------------------------------------------------------------ */
 /* Attach body `obj` to `parent` (an articulated object with link >= 0, or a body with -1).
  * rigid (loose = 0): obj keeps its transform relative to the link and is made kinematic;

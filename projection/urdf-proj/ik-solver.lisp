@@ -163,7 +163,9 @@ second and third values: the final position and rotation errors."
 the chain's base link frame) within the tolerances and the joint limits, or NIL. With USE-NATIVE the native KDL solver of the chain runs first (from
 SEED, then MAX-RESTARTS random restarts seeded from RANDOM-STATE); then the Lisp
 Levenberg–Marquardt solver starts at SEED (joint values, default the middle of the limits)
-and up to MAX-RESTARTS random configurations drawn from RANDOM-STATE. Second and third values: the position and rotation error."
+and up to MAX-RESTARTS random configurations drawn from RANDOM-STATE (after a native failure,
+only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and rotation error
+\(of the best attempt)."
   (unless (cl-transforms:pose-p goal-pose)
     (projection-error "SOLVE-IK: goal ~s, expected a CL-TRANSFORMS pose." goal-pose))
   (let* ((n (length (ik-chain-joint-names chain)))
@@ -189,7 +191,10 @@ and up to MAX-RESTARTS random configurations drawn from RANDOM-STATE. Second and
                                   :rotation-tolerance rt :random-seed (random #.(expt 2 32) random-state))
           (when solution
             (return-from solve-ik (values (coerce (wrap-continuous chain (copy-seq solution)) 'list)
-                                          (aref err 0) (aref err 1))))))
+                                          (aref err 0) (aref err 1))))
+          (if *ik-fallback-restarts*
+              (setf max-restarts (min max-restarts *ik-fallback-restarts*))
+              (return-from solve-ik (values nil (aref err 0) (aref err 1))))))
       (dotimes (attempt (1+ max-restarts))
         (let ((start (if (zerop attempt) q (random-configuration chain random-state))))
           (multiple-value-bind (ok pe re) (ik-attempt chain goal start pt rt *ik-max-iterations*)

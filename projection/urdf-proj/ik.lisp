@@ -20,6 +20,11 @@ environment, so projections are repeatable.")
 (defparameter *ik-rotation-tolerance* 1d-2 "Largest accepted IK orientation error (radians).")
 (defparameter *ik-max-restarts* 40 "Random restarts of one IK call after the seeded attempt.")
 (defparameter *ik-max-iterations* 60 "Iterations of one IK attempt.")
+(defparameter *ik-fallback-restarts* nil
+  "What the Lisp solver tries after the native solver of the chain failed (from the same seed
+and with *IK-MAX-RESTARTS* random restarts of its own): NIL nothing, N its seeded attempt and N
+random restarts. Measured on randomized move-bottle runs: the seeded attempt solved none of
+2 348 goals the native solver had failed on, 40 random restarts 1 of 1 111 (at 9 ms per run).")
 
 (deftype dvec () '(simple-array double-float (*)))
 

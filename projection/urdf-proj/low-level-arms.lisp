@@ -51,7 +51,8 @@ MANIPULATION-GOAL-NOT-REACHED after moving. Returns the arm joint states."
         (pairs (append (arm-configuration-pairs :left left-configuration)
                        (arm-configuration-pairs :right right-configuration))))
     (with-motion ("moving-arm-joints")
-      (let ((off (set-arm-joints robot pairs)))
+      (let ((off (with-sweep-check ("moving-arm-joints" :arm :robot robot)
+                   (set-arm-joints robot pairs))))
         (when off
           (cpl:fail 'common-fail:manipulation-goal-not-reached
                     :description (format nil "Arm joints out of their limits: ~
@@ -84,7 +85,8 @@ signalled. MAXIMUM-EFFORT is accepted and has no effect in projection. Returns t
                                          ((:close :grip) lo)
                                          (t (clamp-joint robot j (* action multiplier)))))))
                            joints)))
-        (btr:set-robot-state-from-joints pairs robot)
+        (with-sweep-check ("gripping" :gripper :robot robot)
+          (btr:set-robot-state-from-joints pairs robot))
         (when (eq action :grip)
           (let ((hand (hand-links arm robot)))
             (unless (loop for (a la b lb) in (btr::contact-records btr:*current-bullet-world* robot)

@@ -5,24 +5,49 @@
 
 ;;; ---- collisions -----------------------------------------------------------------------------
 
+(defvar *grasped-objects* '()
+  "The names of the objects the robot's hands are closing in on (set by the picking-up plan
+around its grasping step): contacts of the hand links with them are the grasp, not collisions.")
+
+(defvar *placed-objects* '()
+  "The names of the held objects being put down (set by the placing plan around its putting
+step): their contacts with the surface they are put on are the placing, not collisions.")
+
+(defvar *grasp-container-links* '()
+  "The environment links the hands may touch while closing in on *GRASPED-OBJECTS*: the
+container the object lies in (its board, walls and bottom).")
+
+(defun grasp-contact-p (robot link other other-link)
+  "True when LINK of ROBOT is a hand link touching an object being grasped, or OTHER-LINK of
+the environment OTHER that holds it (*GRASP-CONTAINER-LINKS*)."
+  (and *grasped-objects* link
+       (or (member (btr:name other) *grasped-objects*)
+           (and other-link (eq other (btr:get-environment-object))
+                (member other-link *grasp-container-links* :test #'string=)))
+       (loop for arm in (ignore-errors (robot-arms))
+             thereis (member link (hand-links arm robot) :test #'string=))))
+
 (defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
                               ignore-links)
   "The names of the objects the robot collides with: contacts of its links (except the links
 in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
 with anything but the robot and each other. Contacts of the robot with the floor (static
-planes) do not count."
+planes), of its hands with the objects being grasped (*GRASPED-OBJECTS*) and of the objects
+being put down (*PLACED-OBJECTS*) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
          (hits '()))
     (loop for (a la b lb) in (btr::contact-records world robot)
           for other = (if (eq a robot) b a)
           for link = (if (eq a robot) la lb)
+          for other-link = (if (eq a robot) lb la)
           unless (or (member (btr:name other) attached)
                      (eq (btr:object-kind other) :static-plane)
-                     (and link (member link ignore-links :test #'string=)))
+                     (and link (member link ignore-links :test #'string=))
+                     (grasp-contact-p robot link other other-link))
             do (pushnew (btr:name other) hits))
     (dolist (name attached)
       (let ((o (btr:object world name)))
-        (when o
+        (when (and o (not (member name *placed-objects*)))
           (loop for (a nil b nil) in (btr::contact-records world o)
                 for other = (if (eq a o) b a)
                 unless (or (eq other robot) (member (btr:name other) attached))
@@ -71,7 +96,8 @@ NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base
 odom_x_joint / odom_y_joint / odom_z_joint entries."
   (let* ((robot (robot-object))
          (goal (navigation-goal-in-map pose))
-         (before (btr:pose robot)))
+         (before (btr:pose robot))
+         (state (and *sweep-check* (robot-state-vectors robot))))
     (with-motion ("going")
       (setf (btr:pose robot) goal)
       (let ((hits (robot-collisions :robot robot)))
@@ -80,6 +106,7 @@ odom_x_joint / odom_y_joint / odom_z_joint entries."
           (cpl:fail 'common-fail:navigation-pose-unreachable
                     :description (format nil "Pose ~a is unreachable: the robot would collide with ~{~s~^, ~}."
                                          (pose-summary goal) hits))))
+      (when state (check-motion-sweep state "going" :base :robot robot))
       (let ((o (cl-transforms:origin goal)))
         (append (mapcar (lambda (e) (list (car e) (cdr e))) (btr:joint-states robot))
                 (list (list "odom_x_joint" (cl-transforms:x o))
@@ -117,7 +144,8 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
                          (:middle (/ (+ lo hi) 2))
                          (t joint-angle)))
                (value (max lo (min hi wanted))))
-          (btr:set-robot-state-from-joints (list (list joint value)) robot)
+          (with-sweep-check ("moving-torso" :torso :robot robot)
+            (btr:set-robot-state-from-joints (list (list joint value)) robot))
           (when (> (abs (- value wanted)) 1d-9)
             (cpl:fail 'common-fail:torso-goal-not-reached
                       :description (format nil "Torso goal ~a is outside the limits [~a, ~a] of ~a; ~

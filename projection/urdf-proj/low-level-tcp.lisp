@@ -118,7 +118,9 @@ MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
          (base0 (btr:pose robot))
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
-         (state0 (btr:joint-states robot)))
+         (state0 (btr:joint-states robot))
+         (sweep-start (and *sweep-check* (robot-state-vectors robot)))
+         (swept nil))
     (block search
       (dolist (offset (base-candidates move-base))
         (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
@@ -130,11 +132,15 @@ MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
                                  collect (mapcar #'list (coerce (ik-chain-joint-names (arm-ik-chain arm robot)) 'list) q))))
             (when (and solutions (= (length solutions) (length ee-goals)))
               (btr:set-robot-state-from-joints (apply #'append solutions) robot)
-              (if (perform-collision-check collision-mode arms robot)
+              (if (and (perform-collision-check collision-mode arms robot)
+                       (multiple-value-bind (ok sweeps) (tcp-sweep-verdict sweep-start collision-mode arms robot)
+                         (unless ok (setf swept (or swept sweeps)))
+                         ok))
                   (return-from search t)
                   (btr:set-robot-state-from-joints state0 robot))))))
       (setf (btr:pose robot) base0)
       (btr:set-robot-state-from-joints state0 robot)
+      (report-sweeps swept :robot robot :before sweep-start)  ; signals under :fail
       (cpl:fail 'common-fail:manipulation-pose-unreachable
                 :description (format nil "Tool frame goals ~{~{~(~a~) ~a~}~^, ~}: unreachable for ~
                                           the end effector or in collision."

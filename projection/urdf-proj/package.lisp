@@ -17,7 +17,8 @@
    #:drive #:move-torso #:look-at #:look-at-pose-stamped #:detect #:gripper-action
    #:move-gripper-joint #:move-tcp #:move-joints #:position-arms
    ;; collision modes and checks
-   #:*be-strict-with-collisions* #:robot-collisions #:perform-collision-check
+   #:*be-strict-with-collisions* #:robot-collisions #:perform-collision-check #:*grasped-objects*
+   #:*grasp-container-links* #:*placed-objects*
    ;; inverse kinematics
    #:arm-ik-chain #:ik-chain #:ik-chain-joint-names #:ik-chain-base-link
    #:ik-chain-tip-link #:solve-ik #:chain-forward-kinematics #:arm-ik

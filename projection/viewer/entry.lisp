@@ -37,10 +37,9 @@ WORLD (and moved when PORT or HOST differ). Returns the URL."
 
 (defun debug-window-viewer (world)
   "The DEBUG-WINDOW hook: start (or point) the viewer at WORLD when
-*START-VIEWER-FROM-DEBUG-WINDOW*."
+*START-VIEWER-FROM-DEBUG-WINDOW*, and print its URL (each call: the window of the tutorials
+is this page)."
   (when *start-viewer-from-debug-window*
-    (viewer :world world :stream (if (and (fboundp 'viewer-running-p) (funcall 'viewer-running-p))
-                                     nil           ; the URL was printed when it started
-                                     *standard-output*))))
+    (viewer :world world :stream *standard-output*)))
 
 (setf btr::*debug-window-hook* 'debug-window-viewer)

@@ -184,6 +184,21 @@ var CramViewer = (function () {
         }
         (o.samples || []).forEach(function (p) { g.add(arrow(p, 0x3060ff, 0.25)); });
         if (o.chosen) { var a = arrow(o.chosen, 0x10c010, 0.45); a.name = "chosen"; g.add(a); }
+      } else if (o.type === "sweep") {
+        // the moving link's path: grey up to the first contact, red from there on (the
+        // sweeping segment), and the first contact as a red ball
+        var pts = (o.path || []).map(function (p) { return new THREE.Vector3(p[0], p[1], p[2]); });
+        var cut = Math.max(1, Math.min(pts.length - 1, Math.round(o.fraction * (pts.length - 1))));
+        var before = pts.slice(0, cut + 1), after = pts.slice(cut);
+        [[before, 0x777777], [after, 0xe01010]].forEach(function (part) {
+          if (part[0].length < 2) return;
+          var line = new THREE.Line(new THREE.BufferGeometry().setFromPoints(part[0]),
+                                    new THREE.LineBasicMaterial({ color: part[1] }));
+          line.name = part[1] === 0xe01010 ? "sweep-path" : "sweep-approach"; g.add(line);
+        });
+        var hit = new THREE.Mesh(new THREE.SphereBufferGeometry(0.025, 16, 12), new THREE.MeshBasicMaterial({ color: 0xe01010 }));
+        hit.position.set(o.point[0], o.point[1], o.point[2]); hit.name = "sweep-contact";
+        g.add(hit);
       } else if (o.type === "target") {
         var t = new THREE.Mesh(new THREE.SphereBufferGeometry(0.04, 16, 12), new THREE.MeshBasicMaterial({ color: 0xff2020 }));
         t.position.set(o.point[0], o.point[1], o.point[2]); t.name = "target";
@@ -364,9 +379,16 @@ var CramViewer = (function () {
     slider.type = "range"; slider.min = 0; slider.max = Math.max(0, steps.length - 1); slider.value = 0;
     [prev, play, next, slider, label].forEach(function (x) { self.bar.appendChild(x); });
     this.bar.appendChild(ticks);
+    function sweepsOf(s) { return (s.overlays || []).filter(function (o) { return o.type === "sweep"; }); }
     steps.forEach(function (s, i) {
+      var at = function (k) { return (steps.length > 1 ? 100 * k / (steps.length - 1) : 0); };
+      if (i > 0 && sweepsOf(s).length) {   // the motion into this step swept through something
+        var seg = el("span", "seg swept"); seg.style.left = at(i - 1) + "%"; seg.style.width = (at(i) - at(i - 1)) + "%";
+        seg.title = i + ": " + sweepsOf(s).map(function (o) { return o.text; }).join("; ");
+        seg.onclick = function () { self.go(i); }; ticks.appendChild(seg);
+      }
       var t = el("span", s.failed ? "tick failed" : "tick"); t.title = i + ": " + s.label;
-      t.style.left = (steps.length > 1 ? 100 * i / (steps.length - 1) : 0) + "%";
+      t.style.left = at(i) + "%";
       t.onclick = function () { self.go(i); }; ticks.appendChild(t);
     });
     prev.onclick = function () { self.go(current - 1); };
@@ -388,10 +410,11 @@ var CramViewer = (function () {
       var s = steps[i];
       self.setState(s.state);
       var latest = {};            // each kind of overlay: the latest up to this step
-      for (var k = 0; k <= i; k++) (steps[k].overlays || []).forEach(function (o) { latest[o.type] = o; });
-      self.setOverlays(Object.keys(latest).map(function (t) { return latest[t]; }));
+      for (var k = 0; k <= i; k++) (steps[k].overlays || []).forEach(function (o) { if (o.type !== "sweep") latest[o.type] = o; });
+      self.setOverlays(Object.keys(latest).map(function (t) { return latest[t]; }).concat(sweepsOf(s)));
       label.textContent = "step " + (i + 1) + "/" + steps.length + ": " + s.label + (s.failed ? " (failed)" : "") +
-        "  +" + s.offset.toFixed(3) + " s";
+        "  +" + s.offset.toFixed(3) + " s" +
+        sweepsOf(s).map(function (o) { return " — sweeps " + o.text; }).join("");
       label.className = s.failed ? "label failed" : "label";
       Object.keys(nodes).forEach(function (id) { nodes[id].classList.remove("current"); });
       if (s.node && nodes[s.node]) { nodes[s.node].classList.add("current"); nodes[s.node].scrollIntoView({ block: "nearest" }); }

@@ -32,6 +32,27 @@ up), so the transform is the identity.")
     ("r_wrist_roll_joint" 0.05106258161229582d0))
   "The right arm folded beside the body, out of the camera's view (:PARK, also :CARRY).")
 
+(defparameter *left-carry-top-joint-states*
+  '(("l_shoulder_pan_joint" 1.0252138d0)
+    ("l_shoulder_lift_joint" -0.0696685d0)
+    ("l_upper_arm_roll_joint" 1.1765833d0)
+    ("l_elbow_flex_joint" -1.9323727d0)
+    ("l_forearm_roll_joint" 1.3824994d0)
+    ("l_wrist_flex_joint" -1.8416234d0)
+    ("l_wrist_roll_joint" 2.9073737d0))
+  "The left arm in front of the body, its gripper pointing down (:CARRY-TOP): for carrying a
+bowl, or a cup or cereal box grasped from the top.")
+
+(defparameter *right-carry-top-joint-states*
+  '(("r_shoulder_pan_joint" -1.1838090d0)
+    ("r_shoulder_lift_joint" -0.3068092d0)
+    ("r_upper_arm_roll_joint" -1.6439096d0)
+    ("r_elbow_flex_joint" -2.0632454d0)
+    ("r_forearm_roll_joint" -1.3016362d0)
+    ("r_wrist_flex_joint" -1.2849451d0)
+    ("r_wrist_roll_joint" -1.9747830d0))
+  "The right arm in front of the body, its gripper pointing down (:CARRY-TOP).")
+
 (defun name-starts-with (prefix name)
   "True when NAME is a string that begins with PREFIX."
   (and (stringp name)
@@ -112,4 +133,8 @@ up), so the transform is the identity.")
   (<- (robot-joint-states :pr2 :arm :left :carry ?joint-states)
     (symbol-value *left-parking-joint-states* ?joint-states))
   (<- (robot-joint-states :pr2 :arm :right :carry ?joint-states)
-    (symbol-value *right-parking-joint-states* ?joint-states)))
+    (symbol-value *right-parking-joint-states* ?joint-states))
+  (<- (robot-joint-states :pr2 :arm :left :carry-top ?joint-states)
+    (symbol-value *left-carry-top-joint-states* ?joint-states))
+  (<- (robot-joint-states :pr2 :arm :right :carry-top ?joint-states)
+    (symbol-value *right-carry-top-joint-states* ?joint-states)))

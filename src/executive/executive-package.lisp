@@ -29,7 +29,8 @@
    ;; occasion predicates
    #:object-in-hand #:object-at-location #:robot-at-location #:looking-at #:torso-at
    #:arms-positioned-at #:tool-frames-at #:gripper-joint-at #:gripper-opened
-   #:gripper-closed #:container-state #:object-attached-to))
+   #:gripper-closed #:container-state #:object-attached-to
+   #:location-accessible #:location-reset))
 
 (defpackage :cram-process-modules
   (:nicknames :cpm)
@@ -45,7 +46,8 @@
    ;; asynchronous process modules
    #:def-asynchronous-process-module #:asynchronous-process-module
    #:asynchronous-process-module-name #:on-input #:on-cancel #:on-run #:synchronization-fluent
-   #:finish-process-module #:fail-process-module #:monitor-process-module))
+   #:finish-process-module #:fail-process-module #:monitor-process-module
+   #:*process-module-debugger-hook* #:continue-pm))
 
 (defpackage :cram-projection
   (:nicknames :proj)

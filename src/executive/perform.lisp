@@ -28,10 +28,12 @@ Every call is logged at :INFO with its designator, `[(PERFORM ACTION) INFO] <tim
 
 (defun log-performing (kind designator)
   "CRAM's line for every PERFORM: `[(PERFORM ACTION) INFO] <time>: ' and the designator.
-Returns what the task tree node shows for DESIGNATOR: the text just logged (printed once), or
-DESIGNATOR itself when the level filtered the line out."
+Returns what the task tree node shows for DESIGNATOR: the text just logged (printed once), or,
+when nobody reads the line (the level filtered it out, or the log stream discards everything),
+a function giving DESIGNATOR, printed only if someone reads the task tree (a designator's
+description does not change)."
   (let ((message (cpl:log-message :info (list 'perform kind) "~%~a~%" designator)))
-    (if message (string-trim '(#\Newline) message) designator)))
+    (if message (string-trim '(#\Newline) message) (lambda () designator))))
 
 (defmethod perform ((designator desig:motion-designator))
   (cpl:with-task-tree-node (:motion (designator-kind-name designator)

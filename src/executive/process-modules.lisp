@@ -155,7 +155,46 @@ the same module are serialised."
     (sb-thread:with-recursive-lock ((process-module-lock module))
       (cpl:with-task-tree-node (:process-module name :designator designator)
         (let ((*executing-process-module* name))
-          (funcall (process-module-function module) designator))))))
+          (call-with-process-module-debugger
+           (lambda () (funcall (process-module-function module) designator))))))))
+
+(defvar *process-module-debugger-hook* nil
+  "NIL, or a debugger hook (a function of a condition and a hook, like *DEBUGGER-HOOK*): a Lisp
+error inside a process module then enters the debugger with this as *DEBUGGER-HOOK*, at the
+frame that signalled it, with the restart CONTINUE-PM (let the error propagate out of the
+process module, as it does when this is NIL). Tasks inherit the value of the thread that
+starts the plan.")
+
+(pushnew '*process-module-debugger-hook* cpl:*inherited-specials*)
+
+(defun continue-pm (&optional condition)
+  "Invoke the restart CONTINUE-PM (offered while *PROCESS-MODULE-DEBUGGER-HOOK* handles an
+error inside a process module): the error propagates out of the process module."
+  (let ((restart (find-restart 'continue-pm condition)))
+    (unless restart
+      (error "CONTINUE-PM: no restart CONTINUE-PM is active~@[ for ~s~]; it exists while ~
+              *PROCESS-MODULE-DEBUGGER-HOOK* handles an error inside a process module."
+             condition))
+    (invoke-restart restart)))
+
+(defun call-with-process-module-debugger (thunk)
+  "Call THUNK; with *PROCESS-MODULE-DEBUGGER-HOOK* set, a Lisp error in it first enters the
+debugger with that hook, at the signalling frame."
+  (let ((hook *process-module-debugger-hook*))
+    (if (null hook)
+        (funcall thunk)
+        (progn
+          (unless (or (functionp hook) (and (symbolp hook) (fboundp hook)))
+            (error "CPM:*PROCESS-MODULE-DEBUGGER-HOOK* is ~s: expected NIL or a function of a ~
+                    condition and a hook." hook))
+          (handler-bind ((error
+                           (lambda (condition)
+                             (unless (typep condition 'cpl:plan-failure)
+                               (with-simple-restart
+                                   (continue-pm "Let the error propagate out of the process module.")
+                                 (let ((*debugger-hook* hook))
+                                   (invoke-debugger condition)))))))
+            (funcall thunk))))))
 
 (prolog:def-fact-group process-module-matching (matching-process-module)
   ;; (matching-process-module ?designator ?module-name): layers add one rule per module.

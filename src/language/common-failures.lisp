@@ -54,10 +54,10 @@
 
 ;; In the task tree the class is shown next to the text, so the text is the
 ;; description alone.
-(defmethod cpl-impl::failure-description ((condition low-level-failure))
+(defmethod cram-language::failure-description ((condition low-level-failure))
   (or (description condition) ""))
 
-(defmethod cpl-impl::failure-description ((condition high-level-failure))
+(defmethod cram-language::failure-description ((condition high-level-failure))
   (or (description condition) ""))
 
 (setf (documentation 'description 'function)

@@ -56,7 +56,7 @@ layer; RETRY-WITH-LOC-DESIGNATOR-SOLUTIONS calls it.")
     (if (subtypep failure-class '(or low-level-failure high-level-failure))
         (cpl:fail failure-class
                   :description (if (typep cause 'condition)
-                                   (cpl-impl::failure-description cause)
+                                   (cram-language::failure-description cause)
                                    (princ-to-string cause)))
         (cpl:fail failure-class))))
 

@@ -82,6 +82,8 @@ The default method handles strings, condition objects and condition class names.
   "Signal the failure CONDITION the way FAIL does; never returns."
   (if (and *current-task* (typep condition 'plan-failure))
       (progn
+        (when (break-on-failure-p condition)
+          (debug-in-task *current-task* condition "Signal the plan failure (failure handling may catch it)."))
         (signal condition)
         ;; Every task thread handles PLAN-FAILURE at its root, so SIGNAL
         ;; only returns if a handler declined and no root handler exists.

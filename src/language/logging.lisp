@@ -41,9 +41,23 @@ Inside a plan the wait can be cut short by evaporation of the task."
 
 ;;; Logging
 
-(defvar *log-stream* *standard-output*
-  "The stream that LOG-MESSAGE writes to. Bound per thread or set globally;
+(defvar *log-stream* nil
+  "The stream that LOG-MESSAGE writes to, or NIL (the default) for the
+*STANDARD-OUTPUT* of the logging thread. A task starts with the
+*STANDARD-OUTPUT* of the thread that starts it, so by default the lines of a
+plan go where the output of its top-level call's caller goes (a REPL, also
+one connected again after a disconnect). Bound per thread or set globally;
 child tasks inherit the binding of their parent.")
+
+(defparameter *log-flush-interval* 0.1
+  "Seconds between forced flushes of the log stream: a line written sooner after
+the last flush stays in the stream's buffer until the next flush (a later line,
+the end of the top-level call, or the stream's own flushing). Keeps a flood of
+lines from turning into one message per line on a REPL connection (SLIME), where
+such a backlog delays interrupts.")
+
+(defvar *last-log-flush* (cons nil 0)
+  "The stream flushed last by LOG-MESSAGE and when (monotonic microseconds).")
 
 (defvar *log-tags* '()
   "The list of tags LOG-INFO, LOG-WARN, LOG-ERROR and LOG-DEBUG print in front
@@ -67,28 +81,73 @@ of a message, e.g. (PICK-PLACE PICK-UP).")
     (let ((millis (floor (* fraction 1000))))
       (format nil "~d.~3,'0d" seconds (min millis 999)))))
 
+(defvar *log-tally* nil
+  "NIL, or an EQUAL hash table in which LOG-MESSAGE counts every line that passes
+*LOG-LEVEL*, under the key (LEVEL . TAGS) (TAGS as a list), whether the line is
+written or not: how often a plan logged a failure or a recovery, without anyone
+formatting or reading the text. Child tasks inherit it.")
+
+(defvar *tally-lock* (bt:make-lock "cpl log tally"))
+
+(declaim (inline sink-stream-p))
+(defun sink-stream-p (stream)
+  "True when STREAM discards what is written to it: a broadcast stream without
+components, such as (MAKE-BROADCAST-STREAM)."
+  (and (typep stream 'broadcast-stream)
+       (null (broadcast-stream-streams stream))))
+
+(defun tally-line (level tags)
+  (let ((key (cons level (if (listp tags) tags (list tags)))))
+    (bt:with-lock-held (*tally-lock*)
+      (incf (gethash key *log-tally* 0)))))
+
 (defun log-message (level tags format-control &rest format-arguments)
   "Write one line `[(TAG ...) LEVEL] 1649925566.714: message' to *LOG-STREAM*
-when LEVEL (:DEBUG, :INFO, :WARN or :ERROR) is at least *LOG-LEVEL*. TAGS is a
-symbol or a list of symbols. Whole lines are written atomically, so lines from
+\(NIL: *STANDARD-OUTPUT*) when LEVEL (:DEBUG, :INFO, :WARN or :ERROR) is at
+least *LOG-LEVEL*. TAGS is a symbol or a list of symbols. Whole lines are written atomically, so lines from
 concurrent tasks do not interleave. Returns the message string, or NIL when the
-level is filtered out."
+level is filtered out or *LOG-STREAM* discards everything (a broadcast stream
+without components): a line nobody reads is not formatted. *LOG-TALLY* counts
+the line in both cases."
   (let ((rank (level-rank level)))
     (unless (stringp format-control)
       (error "log-message: expected a format control string, got ~s." format-control))
-    (when (>= rank (level-rank *log-level*))
+    (when (and (>= rank (level-rank *log-level*))
+               (progn (when *log-tally* (tally-line level tags))
+                      (not (sink-stream-p *log-stream*))))
       (let* ((message (apply #'format nil format-control format-arguments))
              (line (format nil "[~:@(~a~) ~a] ~a: ~a"
                            (if (listp tags) (format nil "~a" tags) (format nil "(~a)" tags))
                            (symbol-name level)
                            (format-unix-time (unix-time))
                            message))
-             (stream *log-stream*))
+             (stream (log-stream)))
         (bt:with-lock-held (*log-lock*)
           (fresh-line stream)
           (write-line line stream)
-          (force-output stream))
+          (let ((now (monotonic-microseconds))
+                (last *last-log-flush*))
+            (when (or (not (eq (car last) stream))
+                      (>= (- now (cdr last)) (* *log-flush-interval* 1000000)))
+              (force-output stream)
+              (setf *last-log-flush* (cons stream now)))))
         message))))
+
+(defun log-stream ()
+  "The stream log lines go to now: *LOG-STREAM*, or *STANDARD-OUTPUT* when it is NIL."
+  (let ((stream (or *log-stream* *standard-output*)))
+    (unless (streamp stream)
+      (error "CPL:*LOG-STREAM* is ~s: expected an output stream, or NIL for *STANDARD-OUTPUT*."
+             stream))
+    stream))
+
+(defun flush-log ()
+  "Force out the log lines buffered in the current log stream."
+  (let ((stream (log-stream)))
+    (bt:with-lock-held (*log-lock*)
+      (force-output stream)
+      (setf *last-log-flush* (cons stream (monotonic-microseconds))))
+    nil))
 
 (defun log-debug (format-control &rest format-arguments)
   "Log at level :DEBUG with the tags in *LOG-TAGS*."

@@ -1,7 +1,9 @@
-;;;; Package CRAM-LANGUAGE (nicknames CPL and CPL-IMPL): the plan language.
+;;;; Package CRAM-LANGUAGE (nickname CPL): the plan language. CRAM-LANGUAGE-IMPLEMENTATION
+;;;; (CPL-IMPL) re-exports the names CRAM's implementation package shares with it
+;;;; (implementation-package.lisp).
 
 (defpackage :cram-language
-  (:nicknames :cpl :cpl-impl)
+  (:nicknames :cpl)
   (:use :cl)
   (:shadow #:sleep)
   (:import-from :cram-walker #:plan-tree-node #:plan-tree-node-sexp #:plan-tree-node-parent
@@ -49,4 +51,7 @@
    #:node-duration #:find-task-tree-nodes #:node-pictures #:note-picture
    ;; logging
    #:log-message #:log-debug #:log-info #:log-warn #:log-error
-   #:*log-stream* #:*log-tags* #:*log-level* #:with-log-tags))
+   #:*log-stream* #:*log-tags* #:*log-level* #:*log-tally* #:with-log-tags
+   ;; the debugger inside plans
+   #:*debug-on-lisp-errors* #:*break-on-plan-failures* #:abort-plan
+   #:plan-aborted #:plan-aborted-name))

@@ -9,7 +9,7 @@
   "One node of the task tree recorded while a top-level plan runs."
   (kind :plan :type keyword)
   (name nil)
-  (designator nil)
+  (%designator nil)     ; the printed designator, or (function . package) until someone asks
   (parent nil)
   (%children '())
   (start-time 0 :type integer)
@@ -26,7 +26,6 @@
 (setf (documentation 'node-kind 'function)
       "The kind of a task tree node: :TOP-LEVEL, :PLAN, :ACTION, :MOTION, :PAR, :PURSUE, :TRY-ALL, :PAR-CHILD or any keyword a layer uses."
       (documentation 'node-name 'function) "The name of a task tree node (a symbol or string)."
-      (documentation 'node-designator 'function) "The printed designator of a task tree node, or NIL."
       (documentation 'node-parent 'function) "The parent node, NIL for the root."
       (documentation 'node-start-time 'function) "Monotonic clock time (microseconds) at which the node started."
       (documentation 'node-end-time 'function) "Monotonic clock time (microseconds) at which the node ended, NIL while it runs."
@@ -72,11 +71,26 @@ first, each a plist (:CLASS symbol :DESCRIPTION string)."
                            (prin1-to-string designator))
              (error () (format nil "<unprintable ~s>" (type-of designator)))))))
 
+(defun node-designator (node)
+  "The printed designator of a task tree node, or NIL. A node made with a function as its
+designator calls it and prints its value (in the package current when the node was made) the
+first time this is asked: a task tree nobody reads prints nothing."
+  (let ((d (node-%designator node)))
+    (if (consp d)
+        (let ((text (let ((*package* (cdr d))) (designator-string (funcall (car d))))))
+          (bt:with-lock-held ((node-lock node))
+            (setf (node-%designator node) text)))
+        d)))
+
 (defun make-task-tree-node (kind name &key designator parent)
-  "Create a running node, attached as the last child of PARENT when given."
+  "Create a running node, attached as the last child of PARENT when given. DESIGNATOR is
+printed now, unless it is a function: then NODE-DESIGNATOR calls it when first asked (for a
+value that does not change meanwhile)."
   (check-type kind keyword)
   (let ((node (%make-task-tree-node :kind kind :name name
-                                    :designator (designator-string designator)
+                                    :%designator (if (functionp designator)
+                                                     (cons designator *package*)
+                                                     (designator-string designator))
                                     :parent parent
                                     :start-time (monotonic-microseconds)
                                     :start-unix (unix-time))))

@@ -9,7 +9,8 @@
 (defvar *inherited-specials*
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
-    *log-stream* *log-tags* *log-level* *sleep-function*)
+    *log-stream* *log-tags* *log-level* *log-tally* *sleep-function*
+    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
@@ -35,7 +36,8 @@ projection environment's clock or the current designators.")
   (failure nil)
   (finish-order nil)
   (evaporate-requested nil)
-  (evaporating nil))
+  (evaporating nil)
+  (aborted nil))
 
 (setf (documentation 'task-name 'function) "The name of a task."
       (documentation 'task-status 'function)
@@ -126,6 +128,8 @@ TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
                              (return-from run)))
                          (error
                            (lambda (c)
+                             (when (and *debug-on-lisp-errors* (not (typep c 'task-exit-error)))
+                               (debug-in-task task c "Let the error end the task as a plan failure."))
                              (when (typep c 'control-error)
                                ;; a THROW to a tag no frame of this thread established
                                (setf c (make-condition 'task-exit-error
@@ -180,6 +184,18 @@ given node is used."
       (handler-case (bt:interrupt-thread thread (lambda () (evaporate-self task)))
         (error () nil)))))
 
+(defun stop-plan-from-task (task)
+  "Stop the plan TASK belongs to: mark its root task aborted, evaporate the root, and unwind
+TASK's own thread."
+  (let ((root (loop for tk = task then (task-parent tk)
+                    while (task-parent tk)
+                    finally (return tk))))
+    (setf (task-aborted root) t)
+    (unless (eq root task)
+      (evaporate-task root))
+    (setf (task-evaporating task) t)
+    (throw task :evaporated)))
+
 (defun evaporate-and-join (group)
   "Evaporate every unfinished task of GROUP and wait for all their threads."
   (sb-sys:without-interrupts
@@ -225,10 +241,33 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
+(defun run-task-here (name group thunk node)
+  "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
+thread would: the task's bindings, its outcome in GROUP. Returns the task."
+  (let ((task (%make-task :name name :parent nil :index 0 :group group :status :running
+                          :thread sb-thread:*current-thread*)))
+    (bt:with-lock-held ((task-group-lock group))
+      (push task (task-group-tasks group)))
+    (let ((*current-task* task)
+          (*task-tree-node* nil))
+      (unwind-protect
+           ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
+           ;; debugger (ABORT) is then no foreign exit
+           (handler-bind ((sb-sys:interactive-interrupt
+                            (lambda (c) (declare (ignore c)) (setf (task-evaporating task) t))))
+             (execute-task task thunk node))
+        (unless (task-done-p task)
+          ;; unwound from outside the plan: nothing is left running
+          (setf (task-status task) :evaporated))))
+    task))
+
 (defun call-as-top-level (name thunk)
-  "Run THUNK as the top-level task named NAME in a new thread, with a fresh
-task tree, and wait for it. Returns its values; a failure that escapes it is
-signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
+  "Run THUNK as the top-level task named NAME, with a fresh task tree, and wait
+for it. Returns its values; a failure that escapes it is signalled here with
+ERROR (a wrapped Lisp error is unwrapped first). Called from a thread that runs
+no task (a REPL, a program), the task runs in that thread: no thread is started
+and none waits; otherwise (a top-level inside a task whose *CURRENT-TASK* was
+unbound) in a new thread."
   (when *current-task*
     (error 'nested-top-level-error :name name :outer *current-task*))
   (let* ((root (make-task-tree-node :top-level name))
@@ -237,22 +276,31 @@ signalled here with ERROR (a wrapped Lisp error is unwrapped first)."
     (setf *last-task-tree* root)
     (let ((decision
             (unwind-protect
-                 (progn
-                   (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
-                   (let ((task (first (task-group-tasks group)))
-                         (lock (task-group-lock group)))
-                     (bt:with-lock-held (lock)
-                       (loop
-                         (case (task-status task)
-                           (:succeeded (return (list :succeeded (task-values task))))
-                           ((:failed :evaporated)
-                            (return (list (task-status task) (task-failure task)))))
-                         (sb-thread:condition-wait (task-group-condition group) lock)))))
-              (evaporate-and-join group))))
+                 (if (null *evaporation-target*)
+                     (let ((task (run-task-here (format nil "top-level ~a" name) group thunk root)))
+                       (if (eq (task-status task) :succeeded)
+                           (list :succeeded (task-values task))
+                           (list (task-status task) (task-failure task))))
+                     (unwind-protect
+                          (progn
+                            (spawn-task (format nil "top-level ~a" name) group 0 thunk :node root)
+                            (let ((task (first (task-group-tasks group)))
+                                  (lock (task-group-lock group)))
+                              (bt:with-lock-held (lock)
+                                (loop
+                                  (case (task-status task)
+                                    (:succeeded (return (list :succeeded (task-values task))))
+                                    ((:failed :evaporated)
+                                     (return (list (task-status task) (task-failure task)))))
+                                  (sb-thread:condition-wait (task-group-condition group) lock)))))
+                       (evaporate-and-join group)))
+              (ignore-errors (flush-log)))))
       (destructuring-bind (status payload) decision
         (ecase status
           (:succeeded (values-list payload))
           (:failed (if (typep payload 'common-lisp-error-envelope)
                        (error (envelop-error payload))
                        (error payload)))
-          (:evaporated (error "The top-level task ~s was evaporated." name)))))))
+          (:evaporated (if (task-aborted (first (task-group-tasks group)))
+                           (error 'plan-aborted :name name)
+                           (error "The top-level task ~s was evaporated." name))))))))

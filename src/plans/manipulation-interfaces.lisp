@@ -18,9 +18,18 @@
    #:get-object-type-gripping-effort #:get-object-type-gripper-opening
    #:define-object-type-gripping #:object-rotationally-symmetric-p
    #:manipulation-knowledge-error
+   #:get-object-type-lift-offsets #:get-object-type-carry-config #:define-object-type-carry-config
+   #:grasp-location-variant-p
+   ;; object knowledge in context (generics, methods in CRAM-OBJECT-KNOWLEDGE)
+   #:get-object-likely-location #:get-object-destination #:get-object-location-type
+   #:most-specific-type-method #:no-object-knowledge #:requested-object-type
+   ;; containers (defined by cram-urdf-environment-manipulation)
+   #:get-container-opening-distance #:object-is-a-container
    ;; trajectories
    #:traj-segment #:make-traj-segment #:traj-segment-label #:traj-segment-poses
    #:get-action-trajectory #:get-traj-poses-by-label
+   ;; where an object is (occasions of the household plans)
+   #:location-certain
    #:grasp-pose #:transform-pose-by))
 
 (in-package :cram-manipulation-interfaces)
@@ -107,57 +116,165 @@ whether the object looks the same after any rotation about its z axis."
 
 ;;; ---- grasps ----------------------------------------------------------------------------------
 
+;; A grasp either derives its two pregrasp poses and its lift from the approach direction
+;; (PREGRASP-BACK, PREGRASP-UP, LIFT), or states them as CRAM does: two PREGRASP-OFFSETS in the
+;; object frame and a LIFT-OFFSET in the robot base frame.
 (defstruct (grasp-spec (:constructor %make-grasp-spec))
   "One grasp of an object type: the TCP pose in the object frame, the approach direction
 (unit vector in the object frame along which the gripper moves onto the object), the arms
-that may use it, the pregrasp offsets and the lift height."
+that may use it, the pregrasp offsets and the lift height; or, when PREGRASP-OFFSETS is set,
+the two pregrasp offsets (object frame) and the LIFT-OFFSET vector (base frame)."
   grasp arms translation rotation approach
-  (pregrasp-back 0.15d0) (pregrasp-up 0.07d0) (lift 0.07d0))
+  (pregrasp-back 0.15d0) (pregrasp-up 0.07d0) (lift 0.07d0)
+  pregrasp-offsets lift-offset)
+
+(setf (documentation 'grasp-spec-lift-offset 'function)
+      "NIL, or the two lift offsets (3D vectors, base frame) from the grasp pose.")
 
 (defvar *grasps* (make-hash-table :test 'eq)
   "Object type -> list of GRASP-SPEC in preference order.")
+
+(defvar *grasp-location-variants* (make-hash-table :test 'eq)
+  "Object type -> list of (location-type grasp pregrasp-offsets lift-offset): the pregrasp and
+lift of GRASP when the object lies in or on an object of LOCATION-TYPE.")
 
 (defun d (x) (coerce x 'double-float))
 
 (defun vec (list)
   (destructuring-bind (x y z) list (cl-transforms:make-3d-vector (d x) (d y) (d z))))
 
+(defun real-triple-p (x) (and (listp x) (= 3 (length x)) (every #'realp x)))
+
 (defmacro def-object-type-to-gripper-transforms (object-types arms grasp
                                                  &key grasp-translation grasp-rotation
                                                    approach (pregrasp-back 0.15)
-                                                   (pregrasp-up 0.07) (lift 0.07))
+                                                   (pregrasp-up 0.07) (lift 0.07)
+                                                   pregrasp-offsets lift-offset location-type)
   "Declare the GRASP (a keyword such as :LEFT-SIDE) of OBJECT-TYPES (a keyword or a list) for
 ARMS (a list of arm keywords, or :ALL). GRASP-TRANSLATION (x y z) and GRASP-ROTATION (a
-quaternion (x y z w)) give the tool frame in the object frame; APPROACH (x y z) the
-direction in the object frame along which the gripper moves onto the object. Pregrasp poses
-lie PREGRASP-BACK metres back against the approach (the first also PREGRASP-UP higher);
-lifting raises twice by LIFT metres."
+quaternion (x y z w), or a rotation matrix as three rows ((r11 r12 r13) (r21 r22 r23) (r31
+r32 r33))) give the tool frame in the object frame. Either APPROACH (x y z), the direction in
+the object frame along which the gripper moves onto the object, with pregrasp poses
+PREGRASP-BACK metres back against it (the first also PREGRASP-UP higher) and two lifts by LIFT
+metres; or PREGRASP-OFFSETS ((x y z) [(x y z)]), the two pregrasp poses as offsets of the
+grasp pose in the object frame (one offset: both equal), and LIFT-OFFSET (x y z), the first
+lift in the robot base frame (the second lifts as far again), or ((x y z) (x y z)), the first
+lift and the second one on top of it. With LOCATION-TYPE (a keyword
+such as :DRAWER) only PREGRASP-OFFSETS and LIFT-OFFSET are declared, for objects lying in or
+on an object of that type."
   (let ((types (if (listp object-types) object-types (list object-types))))
     (dolist (type types) (check-type type keyword))
     (check-type grasp keyword)
+    (check-type location-type (or null keyword))
     `(progn
        ,@(loop for type in types
-               collect `(register-grasp ,type ,grasp ',arms ',grasp-translation ',grasp-rotation
-                                        ',approach ,pregrasp-back ,pregrasp-up ,lift))
+               collect (if location-type
+                           `(register-grasp-location-variant ,type ,location-type ,grasp
+                                                             ',pregrasp-offsets ',lift-offset)
+                           `(register-grasp ,type ,grasp ',arms ',grasp-translation ',grasp-rotation
+                                            ',approach ,pregrasp-back ,pregrasp-up ,lift
+                                            ',pregrasp-offsets ',lift-offset)))
        ',grasp)))
 
-(defun register-grasp (type grasp arms translation rotation approach back up lift)
-  (unless (and (listp translation) (= 3 (length translation)) (every #'realp translation))
+(defun parse-rotation (rotation type grasp)
+  "The quaternion of ROTATION: a quaternion list (x y z w) or three matrix rows."
+  (cond ((and (listp rotation) (= 4 (length rotation)) (every #'realp rotation))
+         (cl-transforms:normalize (apply #'cl-transforms:make-quaternion (mapcar #'d rotation))))
+        ((and (listp rotation) (= 3 (length rotation)) (every #'real-triple-p rotation))
+         (handler-case
+             (cl-transforms:matrix->quaternion
+              (make-array '(3 3) :initial-contents (mapcar (lambda (row) (mapcar #'d row)) rotation)))
+           (error ()
+             (knowledge-error "Grasp ~s of ~s: the rotation matrix ~s is not a rotation ~
+                               (orthonormal rows, determinant +1)." grasp type rotation))))
+        (t (knowledge-error "Grasp ~s of ~s: expected a quaternion (x y z w) or a rotation matrix ~
+                             ((r11 r12 r13) (r21 r22 r23) (r31 r32 r33)), got ~s."
+                            grasp type rotation))))
+
+(defun parse-pregrasp-offsets (offsets type grasp)
+  "Two 3D vectors from OFFSETS, a list of one or two (x y z); NIL for NIL."
+  (when offsets
+    (unless (and (listp offsets) (<= 1 (length offsets) 2) (every #'real-triple-p offsets))
+      (knowledge-error "Grasp ~s of ~s: expected pregrasp offsets ((x y z) [(x y z)]), got ~s."
+                       grasp type offsets))
+    (let ((vs (mapcar #'vec offsets)))
+      (list (first vs) (or (second vs) (first vs))))))
+
+(defun lift-pair (v)
+  "The two lift offsets of a lift by V: V and twice V."
+  (list v (cl-transforms:v* v 2d0)))
+
+(defun parse-lift-offset (offset type grasp)
+  "The two lift offsets (from the grasp pose) of OFFSET: (x y z), a lift by it and then by it
+again, or ((x y z) (x y z)), a lift by the first and then by the second."
+  (cond ((null offset) nil)
+        ((real-triple-p offset) (lift-pair (vec offset)))
+        ((and (listp offset) (= 2 (length offset)) (every #'real-triple-p offset))
+         (let ((first (vec (first offset))))
+           (list first (cl-transforms:v+ first (vec (second offset))))))
+        (t (knowledge-error "Grasp ~s of ~s: expected a lift offset (x y z) or two ((x y z) ~
+                             (x y z)), got ~s." grasp type offset))))
+
+(defun approach-from-offsets (offsets)
+  "The unit approach direction towards the grasp from the last pregrasp offset that is not 0."
+  (let ((v (find-if (lambda (v) (> (cl-transforms:v-norm v) 1d-9)) (reverse offsets))))
+    (if v
+        (cl-transforms:normalize-vector (cl-transforms:v* v -1d0))
+        (cl-transforms:make-3d-vector 0 0 -1))))
+
+(defun register-grasp (type grasp arms translation rotation approach back up lift
+                       &optional pregrasp-offsets lift-offset)
+  (unless (real-triple-p translation)
     (knowledge-error "Grasp ~s of ~s: expected a translation (x y z), got ~s." grasp type translation))
-  (unless (and (listp rotation) (= 4 (length rotation)) (every #'realp rotation))
-    (knowledge-error "Grasp ~s of ~s: expected a quaternion (x y z w), got ~s." grasp type rotation))
-  (unless (and (listp approach) (= 3 (length approach)) (every #'realp approach))
-    (knowledge-error "Grasp ~s of ~s: expected an approach direction (x y z), got ~s." grasp type approach))
-  (let ((spec (%make-grasp-spec
-               :grasp grasp :arms arms :translation (vec translation)
-               :rotation (cl-transforms:normalize
-                          (apply #'cl-transforms:make-quaternion (mapcar #'d rotation)))
-               :approach (cl-transforms:normalize-vector (vec approach))
-               :pregrasp-back (d back) :pregrasp-up (d up) :lift (d lift))))
-    (setf (gethash type *grasps*)
-          (append (remove grasp (gethash type *grasps*) :key #'grasp-spec-grasp)
-                  (list spec)))
+  (let ((offsets (parse-pregrasp-offsets pregrasp-offsets type grasp))
+        (lift-vector (parse-lift-offset lift-offset type grasp)))
+    (unless (or offsets (real-triple-p approach))
+      (knowledge-error "Grasp ~s of ~s: expected an approach direction (x y z) or pregrasp ~
+                        offsets, got ~s." grasp type approach))
+    (when (and approach (not (real-triple-p approach)))
+      (knowledge-error "Grasp ~s of ~s: expected an approach direction (x y z), got ~s." grasp type approach))
+    (let ((spec (%make-grasp-spec
+                 :grasp grasp :arms arms :translation (vec translation)
+                 :rotation (parse-rotation rotation type grasp)
+                 :approach (if approach
+                               (cl-transforms:normalize-vector (vec approach))
+                               (approach-from-offsets offsets))
+                 :pregrasp-back (d back) :pregrasp-up (d up) :lift (d lift)
+                 :pregrasp-offsets offsets
+                 :lift-offset (or lift-vector
+                                  (and offsets (lift-pair (cl-transforms:make-3d-vector 0 0 (d lift))))))))
+      (setf (gethash type *grasps*)
+            (append (remove grasp (gethash type *grasps*) :key #'grasp-spec-grasp)
+                    (list spec)))
+      grasp)))
+
+(defun register-grasp-location-variant (type location-type grasp pregrasp-offsets lift-offset)
+  (let ((offsets (parse-pregrasp-offsets pregrasp-offsets type grasp))
+        (lift-vector (parse-lift-offset lift-offset type grasp)))
+    (unless (and offsets lift-vector)
+      (knowledge-error "Grasp ~s of ~s in a ~s: a location-type variant needs both pregrasp ~
+                        offsets and a lift offset." grasp type location-type))
+    (setf (gethash type *grasp-location-variants*)
+          (cons (list location-type grasp offsets lift-vector)
+                (remove-if (lambda (e) (and (eq (first e) location-type) (eq (second e) grasp)))
+                           (gethash type *grasp-location-variants*))))
     grasp))
+
+(defun grasp-location-variant (object-type grasp location-type)
+  "(pregrasp-offsets lift-offset) of GRASP of OBJECT-TYPE for a LOCATION-TYPE, or NIL: the
+variant of the nearest supertype of OBJECT-TYPE declared for LOCATION-TYPE or a supertype."
+  (when location-type
+    (let ((location-types (object-type-supertypes location-type)))
+      (loop for type in (object-type-supertypes object-type)
+            for entry = (loop for lt in location-types
+                              thereis (find-if (lambda (e) (and (eq (first e) lt) (eq (second e) grasp)))
+                                               (gethash type *grasp-location-variants*)))
+            when entry return (cddr entry)))))
+
+(defun grasp-location-variant-p (object-type grasp location-type)
+  "True when GRASP of OBJECT-TYPE has its own pregrasp and lift for objects in or on an object
+of LOCATION-TYPE (or of a subtype of a type declared so)."
+  (and (grasp-location-variant object-type grasp location-type) t))
 
 (defun type-grasp-specs (object-type)
   (or (some (lambda (x) (gethash x *grasps*)) (object-type-supertypes object-type))
@@ -218,21 +335,34 @@ object frame. OBJECT-NAME is accepted for per-object knowledge and not used othe
     (cl-transforms:make-transform (grasp-spec-translation spec) (grasp-spec-rotation spec))))
 
 (defun get-object-type-to-gripper-pregrasp-transforms (object-type object-name arm grasp
-                                                       &optional grasp-transform)
-  "The two pregrasp tool frames (object frame) of GRASP: back against the approach and up,
-then back at the grasp height."
+                                                       &optional grasp-transform location-type)
+  "The two pregrasp tool frames (object frame) of GRASP: its declared pregrasp offsets (those
+of LOCATION-TYPE, the type of the object the object lies in or on, when it has its own), or
+back against the approach and up, then back at the grasp height."
   (let* ((spec (find-grasp-spec object-type grasp))
          (g (or grasp-transform
                 (get-object-type-to-gripper-transform object-type object-name arm grasp)))
-         (back (cl-transforms:v* (grasp-spec-approach spec) (- (grasp-spec-pregrasp-back spec))))
-         (up (cl-transforms:make-3d-vector 0 0 (grasp-spec-pregrasp-up spec))))
-    (list (offset-transform g (cl-transforms:v+ back up))
-          (offset-transform g back))))
+         (offsets (or (first (grasp-location-variant object-type grasp location-type))
+                      (grasp-spec-pregrasp-offsets spec))))
+    (if offsets
+        (mapcar (lambda (o) (offset-transform g o)) offsets)
+        (let ((back (cl-transforms:v* (grasp-spec-approach spec) (- (grasp-spec-pregrasp-back spec))))
+              (up (cl-transforms:make-3d-vector 0 0 (grasp-spec-pregrasp-up spec))))
+          (list (offset-transform g (cl-transforms:v+ back up))
+                (offset-transform g back))))))
 
-(defun get-object-type-to-gripper-lift-offsets (object-type grasp)
+(defun get-object-type-lift-offsets (object-type grasp &optional location-type)
+  "The offsets (3D vectors, robot base frame) of the two lift poses from the grasp pose of
+GRASP on an OBJECT-TYPE object lying in or on an object of LOCATION-TYPE: the lift offset and
+twice it, or the first lift and the first plus the second where two were declared."
+  (let ((spec (find-grasp-spec object-type grasp)))
+    (or (second (grasp-location-variant object-type grasp location-type))
+        (grasp-spec-lift-offset spec)
+        (lift-pair (cl-transforms:make-3d-vector 0 0 (grasp-spec-lift spec))))))
+
+(defun get-object-type-to-gripper-lift-offsets (object-type grasp &optional location-type)
   "The heights (metres, world z) of the two lift poses above the grasp pose."
-  (let ((lift (grasp-spec-lift (find-grasp-spec object-type grasp))))
-    (list lift (* 2 lift))))
+  (mapcar #'cl-transforms:z (get-object-type-lift-offsets object-type grasp location-type)))
 
 (defun offset-transform (transform offset)
   (cl-transforms:make-transform (cl-transforms:v+ (cl-transforms:translation transform) offset)
@@ -250,21 +380,21 @@ the resulting pose in the fixed frame."
   (cl-transforms:transform->pose
    (cl-transforms:transform* (cl-transforms:pose->transform pose) transform)))
 
-(defun raise-pose (pose dz)
-  (cl-transforms:make-pose (cl-transforms:v+ (cl-transforms:origin pose)
-                                             (cl-transforms:make-3d-vector 0 0 dz))
-                           (cl-transforms:orientation pose)))
-
 (defun grasp-pose (object-type object-pose arm grasp)
   "The tool frame pose (fixed frame) for grasping an OBJECT-TYPE object at OBJECT-POSE."
   (transform-pose-by object-pose (get-object-type-to-gripper-transform object-type nil arm grasp)))
 
+(defun shift-pose (pose offset)
+  (cl-transforms:make-pose (cl-transforms:v+ (cl-transforms:origin pose) offset)
+                           (cl-transforms:orientation pose)))
+
 (defun get-action-trajectory (action-type arm grasp object-type object-pose
-                              &key object-to-gripper)
+                              &key object-to-gripper location-type)
   "The trajectory segments of ACTION-TYPE (:PICKING-UP or :PLACING) for ARM with GRASP on an
 OBJECT-TYPE object whose pose (fixed frame) is OBJECT-POSE — for placing, the pose the
 object shall have. OBJECT-TO-GRIPPER (a transform in the object frame) replaces the grasp
-knowledge, e.g. the actual hold of an object in hand.
+knowledge, e.g. the actual hold of an object in hand. LOCATION-TYPE, the type of the object
+it lies in or on (e.g. :DRAWER), chooses that location's pregrasp and lift when declared.
 Picking up: :REACHING (two pregrasp poses), :GRASPING, :LIFTING (two poses).
 Placing: :REACHING (the lift poses from above), :PUTTING, :RETRACTING (pregrasp poses)."
   (let* ((g (or object-to-gripper
@@ -272,9 +402,9 @@ Placing: :REACHING (the lift poses from above), :PUTTING, :RETRACTING (pregrasp 
          (grasp-pose (transform-pose-by object-pose g))
          (pregrasps (mapcar (lambda (tr) (transform-pose-by object-pose tr))
                             (get-object-type-to-gripper-pregrasp-transforms
-                             object-type nil arm grasp g)))
-         (lifts (mapcar (lambda (dz) (raise-pose grasp-pose dz))
-                        (get-object-type-to-gripper-lift-offsets object-type grasp))))
+                             object-type nil arm grasp g location-type)))
+         (lifts (mapcar (lambda (v) (shift-pose grasp-pose v))
+                        (get-object-type-lift-offsets object-type grasp location-type))))
     (ecase action-type
       (:picking-up (list (make-traj-segment :reaching pregrasps)
                          (make-traj-segment :grasping (list grasp-pose))
@@ -282,6 +412,30 @@ Placing: :REACHING (the lift poses from above), :PUTTING, :RETRACTING (pregrasp 
       (:placing (list (make-traj-segment :reaching (reverse lifts))
                       (make-traj-segment :putting (list grasp-pose))
                       (make-traj-segment :retracting (reverse pregrasps)))))))
+
+;;; ---- carrying ----------------------------------------------------------------------------------
+
+(defvar *carry-configs* (make-hash-table :test 'eq)
+  "Object type -> list of (grasps . arm configuration); GRASPS NIL means every grasp.")
+
+(defmacro define-object-type-carry-config (type configuration &key grasps)
+  "Declare that objects of TYPE are carried with the arms in CONFIGURATION (a keyword such as
+:CARRY-TOP, a robot-joint-states configuration), after any grasp or only after GRASPS."
+  (check-type type keyword)
+  (check-type configuration keyword)
+  `(progn (setf (gethash ,type *carry-configs*)
+                (cons (cons ',grasps ,configuration)
+                      (remove ',grasps (gethash ,type *carry-configs*) :key #'car :test #'equal)))
+          ,type))
+
+(defun get-object-type-carry-config (object-type grasp)
+  "The arm configuration (:CARRY unless declared otherwise) for carrying an OBJECT-TYPE object
+held with GRASP: the declaration of the nearest supertype that covers GRASP."
+  (check-type-keyword object-type 'get-object-type-carry-config)
+  (or (loop for type in (object-type-supertypes object-type)
+            thereis (loop for (grasps . config) in (gethash type *carry-configs*)
+                          when (or (null grasps) (member grasp grasps)) return config))
+      :carry))
 
 (defun get-traj-poses-by-label (trajectory label)
   "The poses of the segment LABEL of TRAJECTORY (a list of TRAJ-SEGMENT)."

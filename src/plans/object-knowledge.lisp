@@ -18,30 +18,22 @@
 (defparameter *lift-z* 0.07 "Metres of each of the two lifting steps.")
 
 ;;; Object types: everything is a household item; shop products are household items too.
+;;; The kitchen's household types (cup, bowl, cutlery, milk, cereal ...) and their grasps are
+;;; in src/object-knowledge/ (system cram-plans/cram-household-knowledge).
 (man-int:define-object-type :household-item)
 (man-int:define-object-type :bottle :household-item)
-(man-int:define-object-type :cup :household-item)
-(man-int:define-object-type :mug :household-item)
-(man-int:define-object-type :bowl :household-item)
-(man-int:define-object-type :cutlery :household-item)
-(man-int:define-object-type :fork-plastic :cutlery)
-(man-int:define-object-type :fork :cutlery)
-(man-int:define-object-type :milk :household-item)
-(man-int:define-object-type :breakfast-cereal :household-item)
 (man-int:define-object-type :somat :household-item)
 (man-int:define-object-type :denkmit :household-item)
 
 (defun household-object-types ()
-  "The object types with grasp knowledge in this package."
-  (remove :household-item (man-int:known-object-types)))
+  "The household object types: every declared subtype of :HOUSEHOLD-ITEM."
+  (remove-if-not (lambda (type) (and (not (eq type :household-item))
+                                     (man-int:object-type-subtype-p :household-item type)))
+                 (man-int:known-object-types)))
 
-;;; Gripping: default effort 50 and opening 0.10 m; cutlery narrow, milk cartons gently.
+;;; Gripping: default effort 50 and opening 0.10 m.
 (man-int:define-object-type-gripping :household-item :effort 50 :opening 0.1)
 (man-int:define-object-type-gripping :bottle :effort 50 :opening 0.1 :rotationally-symmetric t)
-(man-int:define-object-type-gripping :cup :effort 50 :opening 0.1 :rotationally-symmetric t)
-(man-int:define-object-type-gripping :bowl :effort 50 :opening 0.1 :rotationally-symmetric t)
-(man-int:define-object-type-gripping :cutlery :effort 50 :opening 0.05)
-(man-int:define-object-type-gripping :milk :effort 20 :opening 0.1)
 
 ;;; Side, front and back grasps: the gripper moves horizontally onto the object with its z
 ;;; axis up; the tool frame x axis points along the approach.
@@ -60,16 +52,6 @@
                   :approach ,approach :pregrasp-back *pregrasp-back*
                   :pregrasp-up *pregrasp-up* :lift *lift-z*)))))
 
-(defmacro def-top-grasp (types z)
-  `(man-int:def-object-type-to-gripper-transforms ,types :all :top
-     :grasp-translation (0 0 ,z)
-     :grasp-rotation (0 0.7071067811865476d0 0 0.7071067811865476d0)
-     :approach (0 0 -1) :pregrasp-back *pregrasp-back* :pregrasp-up 0 :lift *lift-z*))
-
 ;; Bottles have no top grasp.
 (def-side-grasps :bottle 0.02 0.005)
-(def-side-grasps (:cup :mug) 0.01 0.0)
-(def-top-grasp (:cup :mug) 0.03)
-(def-top-grasp :bowl 0.03)
-(def-top-grasp (:fork-plastic :fork :cutlery) 0.0)
-(def-side-grasps (:milk :breakfast-cereal :somat :denkmit) 0.01 0.0)
+(def-side-grasps (:somat :denkmit) 0.01 0.0)

@@ -71,6 +71,7 @@
                        (t (or (free-arms) (pp-error "No free arm to pick up ~s." name))))))
          (object-pose (object-pose-in-map object))
          (in-base (relative-transform (robot-pose-in-map) object-pose))
+         (location-type (man-int:get-object-location-type object))
          (opening (man-int:get-object-type-gripper-opening type))
          (effort (man-int:get-object-type-gripping-effort type)))
     (loop for arm in arms
@@ -81,7 +82,8 @@
                                                 (list g))
                                          (man-int:get-action-grasps type arm in-base)))
                       for trajectory = (man-int:get-action-trajectory
-                                        :picking-up arm grasp type object-pose)
+                                        :picking-up arm grasp type object-pose
+                                        :location-type location-type)
                       collect (resolved 'pick-up :picking-up
                                         `((:arm ,arm) (:grasp ,grasp) (:object ,object)
                                           (:gripper-opening ,opening) (:effort ,effort)
@@ -113,6 +115,80 @@
 (defun log-pp (tag control &rest arguments)
   (apply #'cpl:log-message :info `(pick-place ,tag) control arguments))
 
+(defun moving-part-links (link-name &optional (env (btr:get-environment-object)))
+  "The links of the environment ENV that move with its link LINK-NAME: the subtree of the link
+below the nearest movable joint above it (a drawer's bottom, walls and boards), or LINK-NAME
+alone when no joint above it moves (a table top)."
+  (let* ((model (and env (btr:urdf env)))
+         (link (and model (gethash link-name (cl-urdf:links model)))))
+    (when link
+      (labels ((below (l)
+                 (cons (cl-urdf:name l)
+                       (loop for j in (cl-urdf:child-joints l) append (below (cl-urdf:child j)))))
+               (moving-root (l)
+                 (let ((j (cl-urdf:parent-joint l)))
+                   (cond ((null j) nil)
+                         ((member (cl-urdf:joint-type j) '(:prismatic :revolute :continuous)) l)
+                         (t (moving-root (cl-urdf:parent j)))))))
+        (let ((root (moving-root link)))
+          (if root (below root) (list link-name)))))))
+
+(defun container-links (object-name)
+  "The environment links around the object OBJECT-NAME when it lies in or on the environment:
+the moving parts of the links it is attached to (MOVING-PART-LINKS). NIL for an object not
+attached to the environment."
+  (let* ((env (btr:get-environment-object))
+         (object (btr:object btr:*current-bullet-world* object-name)))
+    (when (and env object)
+      (remove-duplicates (loop for link in (btr:object-attached env object)
+                               append (moving-part-links link env))
+                         :test #'string=))))
+
+(defmacro with-object-being-grasped ((object) &body body)
+  "Run BODY while the hands may touch OBJECT and the container it lies in
+(URDF-PROJ:*GRASPED-OBJECTS*, URDF-PROJ:*GRASP-CONTAINER-LINKS*): closing in on an object is a
+grasp, not a collision. Set globally, as motions run in process-module threads."
+  (let ((name (gensym "NAME")) (links (gensym "LINKS")))
+    `(let* ((,name (object-designator-name ,object))
+            (,links (container-links ,name)))
+       (unwind-protect
+            (progn (push ,name urdf-proj:*grasped-objects*)
+                   (setf urdf-proj:*grasp-container-links*
+                         (append ,links urdf-proj:*grasp-container-links*))
+                   ,@body)
+         (setf urdf-proj:*grasped-objects* (remove ,name urdf-proj:*grasped-objects* :count 1)
+               urdf-proj:*grasp-container-links*
+               (nthcdr (length ,links) urdf-proj:*grasp-container-links*))))))
+
+(defun target-container-links (target)
+  "The moving parts of the environment link a placing TARGET (a location designator) is in, on
+or above (its URDF-NAME), or NIL."
+  (when (typep target 'desig:location-designator)
+    (let* ((reference (find-if (lambda (v) (typep v 'desig:object-designator))
+                               (mapcar (lambda (key) (desig:desig-prop-value target key))
+                                       '(:in :on :above))))
+           (urdf-name (and reference (desig:desig-prop-value reference :urdf-name))))
+      (when urdf-name
+        (moving-part-links (substitute #\_ #\- (string-downcase (string urdf-name))))))))
+
+(defmacro with-object-being-placed ((object &optional target) &body body)
+  "Run BODY while OBJECT, held, may touch what it is put on (URDF-PROJ:*PLACED-OBJECTS*), and
+the hands the container TARGET is in (URDF-PROJ:*GRASP-CONTAINER-LINKS*). Set globally, as
+motions run in process-module threads."
+  (let ((name (gensym "NAME")) (links (gensym "LINKS")))
+    `(let ((,name (object-designator-name ,object))
+           (,links (target-container-links ,target)))
+       (unwind-protect
+            (progn (push ,name urdf-proj:*placed-objects*)
+                   (push ,name urdf-proj:*grasped-objects*)
+                   (setf urdf-proj:*grasp-container-links*
+                         (append ,links urdf-proj:*grasp-container-links*))
+                   ,@body)
+         (setf urdf-proj:*placed-objects* (remove ,name urdf-proj:*placed-objects* :count 1)
+               urdf-proj:*grasped-objects* (remove ,name urdf-proj:*grasped-objects* :count 1)
+               urdf-proj:*grasp-container-links*
+               (nthcdr (length ,links) urdf-proj:*grasp-container-links*))))))
+
 (defun pick-up (&key arm grasp object gripper-opening effort trajectory look-pose
                 &allow-other-keys)
   "Pick up OBJECT with ARM using GRASP along TRAJECTORY (MAN-INT segments :REACHING,
@@ -133,11 +209,12 @@ and ignored; a failed grip propagates (e.g. COMMON-FAIL:GRIPPER-CLOSED-COMPLETEL
       (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
                           :ignore-failures t))
     (log-pp 'pick-up "Grasping")
-    (perform-arm-action :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)
-                        :ignore-failures t)
-    (log-pp 'pick-up "Gripping")
-    (exe:perform (desig:an action (type gripping) (arm ?arm) (object ?object)
-                           (grasp ?grasp) (effort ?effort)))
+    (with-object-being-grasped (object)
+      (perform-arm-action :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)
+                          :ignore-failures t)
+      (log-pp 'pick-up "Gripping")
+      (exe:perform (desig:an action (type gripping) (arm ?arm) (object ?object)
+                             (grasp ?grasp) (effort ?effort))))
     (log-pp 'pick-up "Lifting")
     (perform-arm-action :lifting arm (man-int:get-traj-poses-by-label trajectory :lifting)
                         :ignore-failures t)
@@ -305,8 +382,9 @@ where the object comes to rest on the surface below it, record its new location,
     (perform-arm-action :reaching arm (man-int:get-traj-poses-by-label trajectory :reaching)
                         :log-tag 'place)
     (log-pp 'place "Putting")
-    (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
-                        :log-tag 'place)
+    (with-object-being-placed (object target)
+      (perform-arm-action :putting arm (man-int:get-traj-poses-by-label trajectory :putting)
+                          :log-tag 'place))
     (log-pp 'place "Opening gripper")
     (exe:perform (desig:an action (type releasing) (gripper ?arm)))
     (log-pp 'place "Retract grasp in knowledge base")

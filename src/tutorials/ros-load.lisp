@@ -134,8 +134,10 @@ again when it is not found in the last crawl), or NIL."
   (let ((name (string-downcase name)))
     (or (cdr (assoc name *cram-system-aliases* :test #'string=))
         (let ((own (concatenate 'string "cram-plans/" name)))
+          ;; registered systems only: looking up a missing secondary system of cram-plans.asd
+          ;; makes ASDF read that file again, which redefines (and so reloads) every system
           (and (not (find #\/ name))
-               (ignore-errors (asdf:find-system own nil))
+               (asdf:registered-system own)
                own)))))
 
 (defun alias-directory ()

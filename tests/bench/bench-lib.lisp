@@ -3,7 +3,8 @@
 (defpackage :cram-bench
   (:use :cl)
   (:export #:now-seconds #:median-seconds #:time-per-call #:run-peer #:add-row #:print-table
-           #:define-benchmark #:run-benchmarks #:format-seconds #:load-tool))
+           #:define-benchmark #:run-benchmarks #:format-seconds #:load-tool
+           #:move-bottle-seconds))
 
 (in-package :cram-bench)
 
@@ -19,6 +20,16 @@
     (handler-bind ((warning #'muffle-warning))
       (load (merge-pathnames file *tools-directory*)))))
 (defvar *benchmarks* '() "Registered benchmarks as (name . function), in order of definition.")
+
+(defun move-bottle-seconds ()
+  "Wall time of one quiet move-bottle with the bottle in view (tools/demo.lisp's RUN-MOVE-BOTTLE,
+loaded by the caller); an error when it fails."
+  (let* ((start (now-seconds))
+         (r (funcall (find-symbol "RUN-MOVE-BOTTLE" :cram-plans-demo)
+                     (symbol-value (find-symbol "*BOTTLE-POSE-IN-VIEW*" :btw-tut))
+                     :pictures nil :log-stream (make-broadcast-stream))))
+    (unless (getf r :success) (error "move-bottle failed: ~a" (getf r :error)))
+    (- (now-seconds) start)))
 
 (defun now-seconds ()
   "Wall clock in seconds with microsecond resolution."

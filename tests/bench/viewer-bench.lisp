@@ -14,13 +14,6 @@
 (defun median-of (values)
   (nth (floor (length values) 2) (sort (copy-list values) #'<)))
 
-(defun one-move-bottle-seconds ()
-  (let ((start (now-seconds))
-        (r (cram-plans-demo:run-move-bottle btw-tut:*bottle-pose-in-view*
-                                            :pictures nil :log-stream (make-broadcast-stream))))
-    (unless (getf r :success) (error "move-bottle failed: ~a" (getf r :error)))
-    (- (now-seconds) start)))
-
 (define-benchmark viewer-idle ()
   ;; the runs alternate between the two settings (the machine's speed drifts over seconds);
   ;; starting and stopping the viewer is not timed
@@ -29,9 +22,9 @@
       (let ((without (let ((cram-viewer:*record-runs* nil)
                            (cram-viewer:*start-viewer-from-debug-window* nil))
                        (cram-viewer:stop-viewer)
-                       (one-move-bottle-seconds)))
+                       (move-bottle-seconds)))
             (with (progn (btr:viewer :port 0 :stream nil)
-                         (one-move-bottle-seconds))))
+                         (move-bottle-seconds))))
         (when (>= i 3) (push without withouts) (push with withs))))
     (cram-viewer:stop-viewer)
     (let ((with (median-of withs)) (without (median-of withouts)))

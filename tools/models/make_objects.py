@@ -70,6 +70,22 @@ def fork_plastic():
     return tris
 
 
+def spoon():
+    """A table spoon 0.2167 x 0.0463 x 0.0189 m, the bowl towards +x: an elliptic dish whose
+    bottom is the lowest point (z -0.0063), and a handle that rises from the dish's rim to a
+    flat end (top z 0.0126) at x -0.1105."""
+    rx, ry, cy = 0.036, 0.02315, -0.00015
+    cx = 0.1062 - rx
+    k = rx / ry
+    outer = [(0.0, -0.0063), (0.012, -0.0052), (0.019, -0.0025), (ry, 0.0030)]
+    inner = [(0.0205, 0.0030), (0.017, -0.0008), (0.010, -0.0035), (0.0, -0.0043)]
+    dish = revolve(outer + inner, 40, sx=k, sy=1.0, cx=cx, cy=cy)
+    neck = prism_y([(-0.025, 0.0096), (0.047, 0.0002), (0.047, 0.0032), (-0.025, 0.0126)],
+                   -0.0040, 0.0040)
+    handle = box((-0.1105, -0.0065, 0.0096), (-0.020, 0.0065, 0.0126))
+    return dish + neck + handle
+
+
 def breakfast_cereal():
     return box((-0.074, -0.029, -0.1019), (0.074, 0.029, 0.1221))
 
@@ -112,7 +128,7 @@ def body():
 
 OBJECTS = [("bottle", bottle), ("cup", cup), ("bowl", bowl), ("mug", mug),
            ("fork_plastic", fork_plastic), ("breakfast_cereal", breakfast_cereal),
-           ("milk", milk), ("somat", somat), ("denkmit", denkmit), ("body", body)]
+           ("milk", milk), ("spoon", spoon), ("somat", somat), ("denkmit", denkmit), ("body", body)]
 
 
 def main(argv):

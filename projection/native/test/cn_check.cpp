@@ -11,16 +11,7 @@
 #include <vector>
 #include <xmmintrin.h>
 
-static int failures = 0, checks = 0;
-#define CHECK(c)                                                          \
-  do {                                                                    \
-    ++checks;                                                             \
-    if (!(c)) {                                                           \
-      ++failures;                                                         \
-      fprintf(stderr, "FAIL %s:%d: %s (last error: %s)\n", __FILE__, __LINE__, #c, \
-              cn_last_error());                                           \
-    }                                                                     \
-  } while (0)
+#include "cn_test.h"
 
 static const char *ARM =
     "<robot name='arm'><link name='base'><collision><geometry><box size='0.2 0.2 0.1'/></geometry></collision></link>"

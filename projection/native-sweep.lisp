@@ -1,0 +1,95 @@
+;;;; cram-native: sweep checks, what a robot or a body passes through between two poses
+;;;; (cn_robot_sweep_check, cn_body_sweep_check).
+
+(in-package :cram-native)
+
+(export '(robot-sweep-check body-sweep-check *sweep-max-step* *sweep-tolerance*))
+
+(defcn "cn_robot_sweep_check" :int (w :int) (r :int) (b0 :pointer) (q0 :pointer) (b1 :pointer)
+  (q1 :pointer) (nq :int) (ign :pointer) (nign :int) (step :double) (tol :double) (flags :int)
+  (o4 :pointer) (od :pointer) (cap :int))
+(defcn "cn_body_sweep_check" :int (w :int) (b :int) (p0 :pointer) (p1 :pointer) (ign :pointer)
+  (nign :int) (step :double) (tol :double) (flags :int) (o4 :pointer) (od :pointer) (cap :int))
+
+(defvar *sweep-max-step* 0.05d0
+  "Largest summed joint rotation (rad) and translation (m) of one sub-step of a sweep check.")
+
+(defvar *sweep-tolerance* 1d-3
+  "Depth (m) below which a sweep check may miss a contact; it never reports a pair whose
+distance stays above 0.")
+
+(defun %ignore-vector (ignore function)
+  "IGNORE, a list of (moving-object moving-link hit-object hit-link) with -1 for any, as an
+IVEC of 4 per record."
+  (unless (and (listp ignore)
+               (every (lambda (r) (and (listp r) (= (length r) 4)
+                                       (every (lambda (v) (typep v '(signed-byte 32))) r)))
+                      ignore))
+    (arg-error function "ignore list ~s, expected a list of (moving-object moving-link ~
+                         hit-object hit-link) integers, -1 for any" ignore))
+  (let ((v (make-array (max 1 (* 4 (length ignore))) :element-type '(signed-byte 32)
+                                                     :initial-element -1)))
+    (loop for r in ignore for i from 0
+          do (loop for x in r for k from 0 do (setf (aref v (+ (* 4 i) k)) x)))
+    v))
+
+(defun %sweep-records (fn)
+  "Call FN with (ints doubles cap) until its records fit; return them as a list of
+(moving-object moving-link hit-object hit-link fraction point), POINT a DVEC of 3."
+  (loop with cap = 8
+        do (let* ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
+                  (dv (make-dvec (* 4 cap)))
+                  (n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
+             (when (<= n cap)
+               (return (loop for i below n
+                             collect (list (aref iv (* 4 i)) (aref iv (+ 1 (* 4 i)))
+                                           (aref iv (+ 2 (* 4 i))) (aref iv (+ 3 (* 4 i)))
+                                           (aref dv (* 4 i))
+                                           (subseq dv (+ 1 (* 4 i)) (+ 4 (* 4 i)))))))
+             (setf cap n))))
+
+(defun %sweep-flags (skip-start-contacts) (if skip-start-contacts 1 0))
+
+(defun robot-sweep-check (world robot base-from joints-from base-to joints-to
+                          &key ignore (max-step *sweep-max-step*) (tolerance *sweep-tolerance*)
+                            skip-start-contacts)
+  "What ROBOT's links and rigidly attached objects pass through while its base moves on a
+straight line from BASE-FROM to BASE-TO (poses as for SET-OBJECT-POSE) and its joints move
+linearly from JOINTS-FROM to JOINTS-TO (every joint, index order, as ROBOT-JOINTS gives them).
+The robot in WORLD is not moved. IGNORE lists (moving-object moving-link hit-object hit-link)
+pairs not to report, -1 for any; SKIP-START-CONTACTS leaves out the pairs within TOLERANCE at
+the start. Returns one list (moving-object moving-link hit-object hit-link fraction point) per
+pair at its first contact, earliest first; links are -1 for bodies, FRACTION in [0, 1] of the
+move, POINT a DVEC x y z."
+  (let* ((f 'robot-sweep-check)
+         (b0 (pose-vec base-from f "start base pose"))
+         (b1 (pose-vec base-to f "end base pose"))
+         (q0 (to-dvec joints-from nil f "start joint values"))
+         (q1 (to-dvec joints-to nil f "end joint values"))
+         (ign (%ignore-vector ignore f))
+         (step (real-arg max-step f "maximum step"))
+         (tol (real-arg tolerance f "tolerance")))
+    (unless (= (length q0) (length q1))
+      (arg-error f "~d start and ~d end joint values, expected as many" (length q0) (length q1)))
+    (%sweep-records
+     (lambda (o4 od cap)
+       (with-vector-pointers ((pb0 b0) (pb1 b1) (pq0 q0) (pq1 q1) (pig ign))
+         (ccall "cn_robot_sweep_check" (int-arg world f "world") (int-arg robot f "robot") pb0 pq0 pb1 pq1 (length q0) pig (length ignore)
+                step tol (%sweep-flags skip-start-contacts) o4 od cap))))))
+
+(defun body-sweep-check (world body from to &key ignore (max-step *sweep-max-step*)
+                                                 (tolerance *sweep-tolerance*) skip-start-contacts)
+  "What BODY (and the bodies rigidly attached to it) passes through moving from pose FROM to
+pose TO (translation on a straight line, rotation by slerp); keys and result as
+ROBOT-SWEEP-CHECK."
+  (let* ((f 'body-sweep-check)
+         (p0 (pose-vec from f "start pose"))
+         (p1 (pose-vec to f "end pose"))
+         (ign (%ignore-vector ignore f))
+         (step (real-arg max-step f "maximum step"))
+         (tol (real-arg tolerance f "tolerance")))
+    (%sweep-records
+     (lambda (o4 od cap)
+       (with-vector-pointers ((pp0 p0) (pp1 p1) (pig ign))
+         (ccall "cn_body_sweep_check" (int-arg world f "world") (int-arg body f "body") pp0 pp1 pig (length ignore) step tol
+                (%sweep-flags skip-start-contacts) o4 od cap))))))

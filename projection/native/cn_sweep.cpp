@@ -1,0 +1,700 @@
+// Sweep checks: what a robot (its links and rigidly attached objects) or a body passes through
+// on its way between two poses, not only what it touches at them.
+//
+// The move is cut into sub-steps of at most `max_step` summed rotation (rad) and translation
+// (m). In a sub-step every moving piece covers the convex hull of its two end placements grown
+// by a bound on how far its real path strays from the straight chords between them: with W the
+// summed rotation and B a bound on the path length of any of its points in the sub-step, the
+// path stays within 3*W*B/8 of the chords (its acceleration is at most 3*W*B). A hull that
+// touches another object is confirmed by halving the interval on distances: an interval whose
+// pieces cannot reach the object (distance at its start beyond its path bound) is clear, one
+// whose start is at or below distance 0 is the first contact. A pair is reported only where a
+// computed distance is <= 0, and missed only when it never penetrates deeper than `tolerance`.
+#include "cn_internal.hpp"
+
+#include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
+#include <algorithm>
+
+namespace cn {
+namespace {
+
+// The convex hull of a convex shape at two placements (world coordinates), grown by `grow`.
+class SweptHull : public btConvexInternalShape {
+ public:
+  const btConvexShape *child = nullptr;
+  btTransform a, b;
+  double grow = 0;
+  SweptHull() { m_shapeType = CUSTOM_CONVEX_SHAPE_TYPE; }
+  void set(const btConvexShape *c, const btTransform &ta, const btTransform &tb, double g) {
+    child = c;
+    a = ta;
+    b = tb;
+    grow = g;
+    setMargin(c->getMargin() + g);
+  }
+  btVector3 localGetSupportingVertexWithoutMargin(const btVector3 &d) const override {
+    btVector3 pa = a * child->localGetSupportingVertexWithoutMargin(d * a.getBasis());
+    btVector3 pb = b * child->localGetSupportingVertexWithoutMargin(d * b.getBasis());
+    return pa.dot(d) >= pb.dot(d) ? pa : pb;
+  }
+  void batchedUnitVectorGetSupportingVertexWithoutMargin(const btVector3 *v, btVector3 *out,
+                                                         int n) const override {
+    for (int i = 0; i < n; ++i) out[i] = localGetSupportingVertexWithoutMargin(v[i]);
+  }
+  void getAabb(const btTransform &t, btVector3 &lo, btVector3 &hi) const override {
+    btVector3 l2, h2;
+    child->getAabb(t * a, lo, hi);
+    child->getAabb(t * b, l2, h2);
+    lo.setMin(l2);
+    hi.setMax(h2);
+    btVector3 g(grow, grow, grow);
+    lo -= g;
+    hi += g;
+  }
+  void calculateLocalInertia(btScalar, btVector3 &inertia) const override {
+    inertia.setValue(0, 0, 0);
+  }
+  const char *getName() const override { return "SweptHull"; }
+};
+
+// The smallest distance (and where) between a probe and one object, from contactPairTest.
+struct Closest : btCollisionWorld::ContactResultCallback {
+  double best;
+  btVector3 point{0, 0, 0};
+  bool found = false;
+  explicit Closest(double maxd) : best(maxd) { m_closestDistanceThreshold = maxd > 0 ? maxd : 0; }
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *, int, int,
+                           const btCollisionObjectWrapper *, int, int) override {
+    double d = cp.getDistance();
+    if (d <= best) {
+      best = d;
+      point = (cp.getPositionWorldOnA() + cp.getPositionWorldOnB()) * 0.5;
+      found = true;
+    }
+    return 0;
+  }
+};
+
+struct Piece {                    // one convex piece of a moving body, in the body frame
+  const btConvexShape *shape;
+  btTransform local;
+};
+
+struct Mover {                    // a moving robot link, attached object or body
+  int obj = -1, link = -1;        // as reported
+  const btCollisionObject *co = nullptr;
+  int frame_link = -1;            // robot link it hangs from; -1: the base (or the body itself)
+  btTransform rel;                // its frame relative to that link (or the base)
+  std::vector<int> chain;         // movable joints from the root to frame_link
+  std::vector<Piece> pieces;
+  double radius = 0;              // bound on |point - frame origin| over its shape
+  double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
+  std::vector<const btCollisionObject *> candidates;
+  std::vector<char> done;         // per candidate: reported, or left out (start contact)
+  std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
+};
+
+struct Hit {
+  int obj, link, hobj, hlink;
+  double t;
+  btVector3 point;
+  bool operator<(const Hit &o) const {
+    if (t != o.t) return t < o.t;
+    return std::array<int, 4>{obj, link, hobj, hlink} < std::array<int, 4>{o.obj, o.link, o.hobj, o.hlink};
+  }
+};
+
+// Bullet's bounding radius of a shape about its frame origin (from its local box).
+double shape_radius(const btCollisionShape *s) {
+  btVector3 lo, hi;
+  s->getAabb(btTransform::getIdentity(), lo, hi);
+  double r2 = 0;
+  for (int k = 0; k < 8; ++k) {
+    btVector3 c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    r2 = std::max(r2, (double)c.length2());
+  }
+  return std::sqrt(r2);
+}
+
+// The movable joints on the way from the root to LINK, root first.
+void link_chain(const Model &m, int link, std::vector<int> &out) {
+  out.clear();
+  for (int l = link; l >= 0;) {
+    int pj = m.links[l].parent_joint;
+    if (pj < 0) break;
+    int type = m.joints[pj].type;
+    if (type == CN_JOINT_REVOLUTE || type == CN_JOINT_CONTINUOUS || type == CN_JOINT_PRISMATIC)
+      out.push_back(pj);
+    l = m.joints[pj].parent;
+  }
+  std::reverse(out.begin(), out.end());
+}
+
+
+struct Sweep {
+  World &w;
+  const Object *robot = nullptr;            // null for a body sweep
+  btTransform base0, base1;
+  btQuaternion rot0, rot1;
+  double angle = 0;                          // base rotation over the move
+  std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
+  std::vector<char> needed;
+  std::vector<btTransform> lp;               // link poses at the time asked last
+  std::vector<Mover> movers;
+  std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
+  std::set<int> moving_ids;
+  const int *ignore4 = nullptr;
+  int n_ignore = 0;
+  double tol = 1e-3;
+  bool skip_start = false;
+  btCollisionObject probe, hull_probe;
+  SweptHull hull;
+  std::vector<Hit> hits;
+
+  Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
+      : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {
+    hull_probe.setCollisionShape(&hull);
+    sync_aabbs(w);
+  }
+
+  // The base (or body) poses at the ends, then the joint changes (q0, q1 set before).
+  void set_ends(const btTransform &a, const btTransform &b) {
+    set_base(a, b);
+    prepare();
+  }
+
+  void set_base(const btTransform &a, const btTransform &b) {
+    base0 = a;
+    base1 = b;
+    rot0 = a.getRotation();
+    rot1 = b.getRotation();
+    if (rot0.dot(rot1) < 0) rot1 = -rot1;
+    angle = rot0.angleShortestPath(rot1);
+  }
+
+  btTransform base_at(double t) const {
+    btQuaternion r = angle > 1e-12 ? rot0.slerp(rot1, t) : rot0;
+    return btTransform(r, base0.getOrigin().lerp(base1.getOrigin(), t));
+  }
+
+  // The frame of mover M at time T; link poses computed into lp when the robot moves.
+  btTransform pose_at(const Mover &m, double t, bool fk_done = false) {
+    btTransform base = base_at(t);
+    if (!robot || m.frame_link < 0) return base * m.rel;
+    if (!fk_done) fk(t, base);
+    return lp[m.frame_link] * m.rel;
+  }
+
+  void fk(double t, const btTransform &base) {
+    for (size_t j = 0; j < qt.size(); ++j) qt[j] = q0[j] + t * (q1[j] - q0[j]);
+    compute_link_poses(*robot->model, base, qt, lp, &needed);
+  }
+
+  void add_pieces(Mover &m, const btCollisionShape *s, const btTransform &local) {
+    if (s->isCompound()) {
+      auto *c = static_cast<const btCompoundShape *>(s);
+      for (int i = 0; i < c->getNumChildShapes(); ++i)
+        add_pieces(m, c->getChildShape(i), local * c->getChildTransform(i));
+    } else if (s->isConvex()) {
+      m.pieces.push_back({static_cast<const btConvexShape *>(s), local});
+    } else {  // a triangle mesh or plane on a moving body: its local box stands in
+      btVector3 lo, hi;
+      s->getAabb(btTransform::getIdentity(), lo, hi);
+      btVector3 half = (hi - lo) * 0.5;
+      half.setMax(btVector3(1e-4, 1e-4, 1e-4));
+      auto box = std::make_unique<btBoxShape>(half);
+      box->setMargin(0);
+      btTransform at(btQuaternion::getIdentity(), (hi + lo) * 0.5);
+      m.pieces.push_back({box.get(), local * at});
+      owned.push_back(std::move(box));
+    }
+  }
+
+  Mover &add_mover(int obj, int link, const btCollisionObject *co, int frame_link,
+                   const btTransform &rel) {
+    movers.emplace_back();
+    Mover &m = movers.back();
+    m.obj = obj;
+    m.link = link;
+    m.co = co;
+    m.frame_link = frame_link;
+    m.rel = rel;
+    add_pieces(m, co->getCollisionShape(), btTransform::getIdentity());
+    m.radius = shape_radius(co->getCollisionShape());
+    moving_ids.insert(obj);
+    return m;
+  }
+
+  // Rigidly attached bodies of PARENT (and theirs), hanging from FRAME_LINK at REL.
+  void add_attached(int parent, int frame_link, const btTransform &rel, int depth) {
+    if (depth > 16) return;
+    for (const Attachment &a : w.attachments) {
+      if (a.parent != parent || a.loose) continue;
+      Object *c = w.objects[a.obj];
+      if (!c || c->kind != CN_BODY || !c->rb || moving_ids.count(a.obj)) continue;
+      int fl = depth == 0 ? a.link : frame_link;
+      btTransform r = depth == 0 ? a.rel : rel * a.rel;
+      moving_ids.insert(a.obj);  // carried objects are never hit by their carrier
+      std::vector<int> chain;
+      if (robot && fl >= 0) link_chain(*robot->model, fl, chain);
+      if (chain_moves(chain)) add_mover(a.obj, -1, c->rb, fl, r).chain = chain;
+      add_attached(a.obj, fl, r, depth + 1);
+    }
+  }
+
+  // W and B of every mover over the whole move (see the file comment), from the chain of its
+  // movable joints: the distance between consecutive joint origins is fixed for revolute joints
+  // and convex in the value of a prismatic one, so its larger end value bounds it.
+  void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
+    double dtrans = (base1.getOrigin() - base0.getOrigin()).length();
+    for (Mover &m : movers) {
+      btVector3 o0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel.getOrigin();
+      btVector3 o1 = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel.getOrigin();
+      // points from the mover's origin back to the base: reach[k] bounds the distance from
+      // joint chain[k]'s origin to any point of the mover
+      double reach = m.radius;
+      double W = angle, B = dtrans;
+      btVector3 p0 = o0, p1 = o1;
+      for (int k = (int)m.chain.size() - 1; k >= 0; --k) {
+        int j = m.chain[k];
+        int child = robot->model->joints[j].child;
+        btVector3 c0 = lp0[child].getOrigin(), c1 = lp1[child].getOrigin();
+        reach += std::max((p0 - c0).length(), (p1 - c1).length());
+        p0 = c0;
+        p1 = c1;
+        double d = std::fabs(dv[j]);
+        if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
+          B += d;
+        } else {
+          W += d;
+          B += d * reach;
+        }
+      }
+      reach += std::max((p0 - base0.getOrigin()).length(), (p1 - base1.getOrigin()).length());
+      B += angle * reach;
+      m.W = W;
+      m.B = B;
+    }
+  }
+
+  bool ignored(const Mover &m, int hobj, int hlink) const {
+    if (w.pair_ignored(m.obj, m.link, hobj, hlink)) return true;
+    for (int i = 0; i < n_ignore; ++i) {
+      const int *r = ignore4 + 4 * i;
+      if ((r[0] == -1 || r[0] == m.obj) && (r[1] == -1 || r[1] == m.link) &&
+          (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
+        return true;
+    }
+    return false;
+  }
+
+  // The box mover M can reach anywhere on its way from T0 to T1: its box at the start grown by
+  // its path bound, cut down to the box of its two end boxes grown by the chord bound.
+  void move_box(const Mover &m, const btTransform &t0, const btTransform &t1, btVector3 &lo,
+                btVector3 &hi) const {
+    btVector3 lo0, hi0, lo1, hi1;
+    m.co->getCollisionShape()->getAabb(t0, lo0, hi0);
+    m.co->getCollisionShape()->getAabb(t1, lo1, hi1);
+    double dev = std::min(m.B, 3 * m.W * m.B / 8);
+    btVector3 g(dev, dev, dev), p(m.B, m.B, m.B);
+    lo = lo0;
+    hi = hi0;
+    lo.setMin(lo1);
+    hi.setMax(hi1);
+    lo -= g;
+    hi += g;
+    lo.setMax(lo0 - p);
+    hi.setMin(hi0 + p);
+  }
+
+  // Every mover's candidates: the bodies (not the robot's, not carried, not filtered out or
+  // ignored) whose boxes meet its move box, from one broadphase query of all the move boxes.
+  void gather_candidates(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
+    size_t nm = movers.size();
+    std::vector<btVector3> mlo(nm), mhi(nm);
+    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
+    for (size_t i = 0; i < nm; ++i) {
+      const Mover &m = movers[i];
+      btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
+      btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
+      move_box(m, a, b, mlo[i], mhi[i]);
+      lo.setMin(mlo[i]);
+      hi.setMax(mhi[i]);
+    }
+    struct Found : btBroadphaseAabbCallback {
+      const Sweep *s;
+      std::vector<const btCollisionObject *> out;
+      bool process(const btBroadphaseProxy *bp) override {
+        auto *co = static_cast<const btCollisionObject *>(bp->m_clientObject);
+        int ob = co->getUserIndex();
+        if (!(s->robot && ob == s->robot->id) && !s->moving_ids.count(ob)) out.push_back(co);
+        return true;
+      }
+    } found;
+    found.s = this;
+    w.dw->getBroadphase()->aabbTest(lo, hi, found);
+    for (size_t i = 0; i < nm; ++i) {
+      Mover &m = movers[i];
+      m.candidates.clear();
+      const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
+      int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
+      for (const btCollisionObject *co : found.out) {
+        const btBroadphaseProxy *h = co->getBroadphaseHandle();
+        if (!TestAabbAgainstAabb2(mlo[i], mhi[i], h->m_aabbMin, h->m_aabbMax)) continue;
+        if (!(h->m_collisionFilterGroup & mask) || !(group & h->m_collisionFilterMask)) continue;
+        int ob, lb;
+        decode_rb(co, ob, lb);
+        if (!ignored(m, ob, lb)) m.candidates.push_back(co);
+      }
+      m.done.assign(m.candidates.size(), 0);
+      m.clear_until.assign(m.candidates.size(), 0);
+    }
+  }
+
+  bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
+                    const btCollisionObject *other) {
+    const btBroadphaseProxy *h = other->getBroadphaseHandle();
+    for (const Piece &p : m.pieces) {
+      hull.set(p.shape, ta * p.local, tb * p.local, grow);
+      btVector3 lo, hi;
+      hull.getAabb(btTransform::getIdentity(), lo, hi);
+      if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
+      Closest c(0);
+      w.dw->contactPairTest(&hull_probe, const_cast<btCollisionObject *>(other), c);
+      if (c.found && c.best <= 0) return true;
+    }
+    return false;
+  }
+
+  Closest distance(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
+    probe.setCollisionShape(const_cast<btCollisionShape *>(m.co->getCollisionShape()));
+    probe.setWorldTransform(t);
+    Closest c(maxd);
+    w.dw->contactPairTest(&probe, const_cast<btCollisionObject *>(other), c);
+    return c;
+  }
+
+  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther).
+  double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                     btVector3 *point = nullptr) {
+    Closest c = distance(m, t, maxd, other);
+    if (point) *point = c.point;
+    return c.found ? c.best : maxd;
+  }
+
+  // Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1. DA and DB are
+  // the distances at the ends, NaN while unknown (computed here and handed on). The distance
+  // changes no faster than the mover's points move, so an interval is clear when its hull
+  // misses OTHER, or when DA + DB exceeds its path bound (going down to 0 and back up again
+  // needs at least that much motion).
+  double confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
+                 double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
+                 int depth) {
+    double h = tb - ta;
+    double path = h * m.B;
+    if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
+    if (std::isnan(da)) da = distance_at(m, pa, path + tol, other, &point);
+    if (da <= 0) return ta;
+    if (da > path) return -1;
+    if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
+    if (db > 0 && da + db > path) return -1;
+    if (path <= tol || depth > 40) {
+      if (db > 0) return -1;
+      distance_at(m, pb, tol, other, &point);
+      return tb;
+    }
+    double tm = 0.5 * (ta + tb), dm = NAN;
+    btTransform pm = pose_at(m, tm);
+    double r = confirm(m, other, ta, pa, da, tm, pm, dm, point, depth + 1);
+    return r >= 0 ? r : confirm(m, other, tm, pm, dm, tb, pb, db, point, depth + 1);
+  }
+
+  bool base_moves = false;
+
+  // The joint changes, once the ends are set.
+  void prepare() {
+    base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
+    if (!robot) return;
+    const Model &md = *robot->model;
+    dv.assign(q0.size(), 0);
+    for (size_t j = 0; j < q0.size(); ++j)
+      dv[j] = model_joint_value(md, q1, (int)j) - model_joint_value(md, q0, (int)j);
+  }
+
+  bool chain_moves(const std::vector<int> &chain) const {
+    if (base_moves) return true;
+    for (int j : chain)
+      if (dv[j] != 0) return true;
+    return false;
+  }
+
+  void run(double max_step) {
+    std::vector<btTransform> lp0, lp1;
+    if (robot) {
+      const Model &md = *robot->model;
+      compute_link_poses(md, base0, q0, lp0);
+      compute_link_poses(md, base1, q1, lp1);
+    }
+    bound_movers(lp0, lp1);
+    // movers that do not move meet nothing they did not touch already
+    movers.erase(std::remove_if(movers.begin(), movers.end(),
+                                [&](const Mover &m) { return !base_moves && m.B == 0; }),
+                 movers.end());
+    if (movers.empty()) return;
+    double total_rot = angle, total_trans = (base1.getOrigin() - base0.getOrigin()).length();
+    if (robot) {
+      std::vector<char> seen(q0.size(), 0);
+      for (const Mover &m : movers)
+        for (int j : m.chain)
+          if (!seen[j]) {
+            seen[j] = 1;
+            (robot->model->joints[j].type == CN_JOINT_PRISMATIC ? total_trans : total_rot) += std::fabs(dv[j]);
+          }
+      needed.assign(robot->model->links.size(), 0);
+      for (const Mover &m : movers)
+        for (int l = m.frame_link; l >= 0;) {
+          if (needed[l]) break;
+          needed[l] = 1;
+          int pj = robot->model->links[l].parent_joint;
+          l = pj >= 0 ? robot->model->joints[pj].parent : -1;
+        }
+      needed[robot->model->root] = 1;
+      qt = q0;
+      lp = lp0;
+    }
+    double n_real = std::ceil(std::max(total_rot, total_trans) / max_step);
+    if (n_real > 1e5)
+      fail(CN_E_ARG, "the move needs %.0f sub-steps of at most %s, more than 100000: raise the maximum step",
+           n_real, num(max_step).c_str());
+    levels = 0;
+    while ((double)(1 << levels) < n_real) ++levels;
+    n = 1 << levels;
+    gather_candidates(lp0, lp1);
+    pool.resize(levels + 2);
+    for (size_t i = 0; i < movers.size(); ++i) {
+      if (movers[i].candidates.empty()) continue;
+      std::vector<int> &all = pool[0];
+      all.clear();
+      for (size_t c = 0; c < movers[i].candidates.size(); ++c) all.push_back((int)c);
+      descend(i, 0, n, 0);
+    }
+  }
+
+  // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
+  int levels = 0, n = 1;
+  std::unordered_map<int, int> point_slot;   // sub-step point k -> its slot
+  std::vector<btTransform> slot_pose;        // per slot, one pose per mover
+  std::vector<btVector3> slot_lo, slot_hi;   // per slot, one box per mover
+  std::vector<std::vector<int>> pool;        // candidate lists per depth
+
+  // The slot of the movers' poses and boxes at time k / n (computed once).
+  int slot(int k) {
+    auto it = point_slot.find(k);
+    if (it != point_slot.end()) return it->second;
+    size_t nm = movers.size();
+    int sl = (int)point_slot.size();
+    point_slot.emplace(k, sl);
+    slot_pose.resize((sl + 1) * nm);
+    slot_lo.resize((sl + 1) * nm);
+    slot_hi.resize((sl + 1) * nm);
+    double t = (double)k / n;
+    if (robot) fk(t, base_at(t));
+    for (size_t i = 0; i < nm; ++i) {
+      const Mover &m = movers[i];
+      if (m.candidates.empty()) continue;
+      size_t at = sl * nm + i;
+      slot_pose[at] = pose_at(m, t, true);
+      m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+    }
+    return sl;
+  }
+
+  // Mover I over the sub-steps ka .. kb against the candidates pool[depth]: those whose boxes
+  // meet the interval's box (the end boxes grown by the chord bound, within the start box
+  // grown by the path bound) go down to halves, and at single sub-steps to the checks.
+  void descend(size_t i, int ka, int kb, int depth) {
+    Mover &m = movers[i];
+    size_t nm = movers.size();
+    size_t a = slot(ka) * nm + i, b = slot(kb) * nm + i;
+    double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
+    double grow = 3 * h * h * m.W * m.B / 8, path = h * m.B;
+    btVector3 lo = slot_lo[a], hi = slot_hi[a];
+    lo.setMin(slot_lo[b]);
+    hi.setMax(slot_hi[b]);
+    lo -= btVector3(grow, grow, grow);
+    hi += btVector3(grow, grow, grow);
+    lo.setMax(slot_lo[a] - btVector3(path, path, path));
+    hi.setMin(slot_hi[a] + btVector3(path, path, path));
+    std::vector<int> &keep = pool[depth + 1];
+    keep.clear();
+    for (int c : pool[depth]) {
+      if (m.done[c] || tb <= m.clear_until[c]) continue;
+      const btBroadphaseProxy *hp = m.candidates[c]->getBroadphaseHandle();
+      if (TestAabbAgainstAabb2(lo, hi, hp->m_aabbMin, hp->m_aabbMax)) keep.push_back(c);
+    }
+    if (keep.empty()) return;
+    if (kb - ka == 8) {
+      // one hull over eight sub-steps clears, in one test, a pair that passes close by
+      // (everything before ta is clear already: the pair is clear up to tb)
+      keep.erase(std::remove_if(keep.begin(), keep.end(),
+                                [&](int c) {
+                                  if (ta < m.clear_until[c] ||
+                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, m.candidates[c]))
+                                    return false;
+                                  m.clear_until[c] = tb;
+                                  return true;
+                                }),
+                 keep.end());
+      if (keep.empty()) return;
+    }
+    if (kb - ka > 1) {
+      int km = (ka + kb) / 2;
+      descend(i, ka, km, depth + 1);
+      descend(i, km, kb, depth + 1);
+      return;
+    }
+    for (int c : keep) {
+      if (m.done[c] || tb <= m.clear_until[c]) continue;
+      const btCollisionObject *other = m.candidates[c];
+      double known = NAN;
+      // conservative advancement: no point of the mover moves faster than B, so a pair
+      // apart by d at ta stays apart until ta + d / B
+      if (ta >= m.clear_until[c]) {
+        double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
+        Closest d0 = distance(m, slot_pose[a], probe_d, other);
+        double d = d0.found ? d0.best : probe_d;
+        if (ka == 0 && skip_start && d <= tol) {
+          m.done[c] = 1;
+          continue;
+        }
+        if (d <= 0) {  // touching at ta
+          m.done[c] = 1;
+          int ob, lb;
+          decode_rb(other, ob, lb);
+          hits.push_back({m.obj, m.link, ob, lb, ta, d0.point});
+          continue;
+        }
+        m.clear_until[c] = ta + d / m.B;
+        if (tb <= m.clear_until[c]) continue;
+        known = d;
+      }
+      btVector3 point;
+      double db = NAN;
+      double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
+      if (t < 0) continue;
+      m.done[c] = 1;
+      int ob, lb;
+      decode_rb(other, ob, lb);
+      hits.push_back({m.obj, m.link, ob, lb, t, point});
+    }
+  }
+};
+
+void check_ignore(World &w, const int *ignore4, int n) {
+  if (n < 0) fail(CN_E_ARG, "ignore list of %d pairs, expected >= 0", n);
+  if (n > 0) check_ptr(ignore4, "ignore list");
+  for (int i = 0; i < n; ++i) {
+    const int *r = ignore4 + 4 * i;
+    for (int s = 0; s < 2; ++s) {
+      int o = r[2 * s], l = r[2 * s + 1];
+      if (o == -1) {
+        if (l != -1) fail(CN_E_ARG, "ignore pair %d: link %d of any object (-1), expected link -1", i, l);
+        continue;
+      }
+      Object &obj = w.obj(o, s == 0 ? "ignore pair's moving object" : "ignore pair's hit object");
+      int nl = obj.kind == CN_BODY ? 0 : (int)obj.link_rb.size();
+      if (l < -1 || l >= nl)
+        fail(CN_E_HANDLE, "ignore pair %d: link %d out of range -1..%d of object %d", i, l, nl - 1, o);
+    }
+  }
+}
+
+void check_common(World &w, const int *ignore4, int n_ignore, double max_step, double tol,
+                  int flags, int cap, const void *o4, const void *od) {
+  check_ignore(w, ignore4, n_ignore);
+  check_positive(max_step, "maximum step");
+  check_positive(tol, "tolerance");
+  if (flags & ~CN_SWEEP_SKIP_START_CONTACTS) fail(CN_E_ARG, "sweep flags %d, expected 0 or %d", flags, CN_SWEEP_SKIP_START_CONTACTS);
+  if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+  if (cap > 0) {
+    check_ptr(o4, "contact output");
+    check_ptr(od, "fraction and point output");
+  }
+}
+
+int write_hits(std::vector<Hit> &hits, int *out4, double *outd, int cap) {
+  std::sort(hits.begin(), hits.end());
+  int n = (int)hits.size();
+  for (int i = 0; i < n && i < cap; ++i) {
+    const Hit &h = hits[i];
+    out4[4 * i] = h.obj;
+    out4[4 * i + 1] = h.link;
+    out4[4 * i + 2] = h.hobj;
+    out4[4 * i + 3] = h.hlink;
+    outd[4 * i] = h.t;
+    for (int k = 0; k < 3; ++k) outd[4 * i + 1 + k] = h.point[k];
+  }
+  return n;
+}
+
+}  // namespace
+}  // namespace cn
+
+using namespace cn;
+
+extern "C" {
+
+int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double *q_from,
+                         const double *base_to7, const double *q_to, int nq, const int *ignore4,
+                         int n_ignore, double max_step, double tolerance, int flags, int *out4,
+                         double *outd, int cap) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &r = w.robot(rh);
+    btTransform b0 = read_pose(base_from7, "start base pose"), b1 = read_pose(base_to7, "end base pose");
+    int nj = (int)r.model->joints.size();
+    if (nq != nj) fail(CN_E_ARG, "joint vectors of %d values, expected %d (every joint of object %d)", nq, nj, rh);
+    check_ptr(q_from, "start joint values");
+    check_ptr(q_to, "end joint values");
+    for (int j = 0; j < nj; ++j) {
+      if (!std::isfinite(q_from[j])) fail(CN_E_ARG, "start joint value %d is %s", j, num(q_from[j]).c_str());
+      if (!std::isfinite(q_to[j])) fail(CN_E_ARG, "end joint value %d is %s", j, num(q_to[j]).c_str());
+    }
+    check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
+    std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
+    s->robot = &r;
+    s->q0.assign(q_from, q_from + nj);
+    s->q1.assign(q_to, q_to + nj);
+    s->set_ends(b0, b1);
+    std::vector<int> chain;
+    for (size_t l = 0; l < r.link_rb.size(); ++l) {
+      if (!r.link_rb[l]) continue;
+      link_chain(*r.model, (int)l, chain);
+      if (s->chain_moves(chain)) s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity()).chain = chain;
+    }
+    s->add_attached(rh, -1, btTransform::getIdentity(), 0);
+    s->run(max_step);
+    return write_hits(s->hits, out4, outd, cap);
+  });
+}
+
+int cn_body_sweep_check(int wh, int bh, const double *from7, const double *to7, const int *ignore4,
+                        int n_ignore, double max_step, double tolerance, int flags, int *out4,
+                        double *outd, int cap) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &b = w.body(bh);
+    btTransform t0 = read_pose(from7, "start pose"), t1 = read_pose(to7, "end pose");
+    if (b.shape && b.shape->kind == 0) fail(CN_E_ARG, "body %d is a plane: it cannot sweep", bh);
+    check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
+    std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
+    s->set_ends(t0, t1);
+    s->add_mover(bh, -1, b.rb, -1, btTransform::getIdentity());
+    s->add_attached(bh, -1, btTransform::getIdentity(), 1);
+    s->run(max_step);
+    return write_hits(s->hits, out4, outd, cap);
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,211 @@
+// Self-test of the sweep checks (cn_robot_sweep_check, cn_body_sweep_check), run under
+// AddressSanitizer/UBSan by `make check`.
+#include "cram_native.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "cn_test.h"
+
+// A one-metre horizontal bar turning about z at the origin, 0.5 m above the floor, and a
+// second joint that lifts a 0.3 m finger at its end.
+static const char *BAR =
+    "<robot name='bar'><link name='base'/>"
+    "<link name='bar'><collision><origin xyz='0.5 0 0'/><geometry><box size='1.0 0.04 0.04'/></geometry></collision></link>"
+    "<link name='finger'><collision><origin xyz='0.15 0 0'/><geometry><box size='0.3 0.02 0.02'/></geometry></collision></link>"
+    "<joint name='turn' type='revolute'><parent link='base'/><child link='bar'/><origin xyz='0 0 0.5'/><axis xyz='0 0 1'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "<joint name='lift' type='revolute'><parent link='bar'/><child link='finger'/><origin xyz='1.0 0 0'/><axis xyz='0 -1 0'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "</robot>";
+
+static const double ID[7] = {0, 0, 0, 0, 0, 0, 1};
+
+struct Rec {
+  int n;
+  int i4[64];
+  double d4[64];
+};
+
+static Rec robot_sweep(int w, int r, const double *q0, const double *q1, const int *ign = nullptr,
+                       int nign = 0, double step = 0.05, int flags = 0,
+                       const double *b0 = ID, const double *b1 = ID) {
+  Rec rec;
+  rec.n = cn_robot_sweep_check(w, r, b0, q0, b1, q1, 2, ign, nign, step, 1e-3, flags, rec.i4,
+                               rec.d4, 16);
+  return rec;
+}
+
+int main() {
+  int w = cn_world_create(0, 0, -9.81);
+  int r = cn_robot_add_urdf(w, BAR, ID, 0);
+  CHECK(r == 0);
+  // a post (radius 5 cm) at x 0.95: the tip of the bar passes through it at angle 0, while the
+  // chord between the bar's tips at -1 and +1 rad stays at x <= 0.55
+  double post_pose[7] = {0.95, 0, 0.5, 0, 0, 0, 1};
+  int post = cn_body_add_cylinder(w, post_pose, 0.05, 1.0, 0);
+  CHECK(post == 1);
+  double qa[2] = {-1, 0}, qb[2] = {1, 0};
+  double poses_before[21], poses_after[21];
+  CHECK(cn_robot_link_poses(w, r, poses_before, 3) == 3);
+
+  // the arc through the post, found with one big sub-step as with many small ones
+  for (double step : {2.5, 0.05, 0.01}) {
+    Rec h = robot_sweep(w, r, qa, qb, nullptr, 0, step);
+    CHECK(h.n == 1);
+    CHECK(h.i4[0] == r && h.i4[1] == 1 && h.i4[2] == post && h.i4[3] == -1);
+    // first contact: the bar's side (half width 0.02) meets the post's edge
+    double expect = -std::asin(0.07 / 0.95);  // joint angle at first contact
+    double frac = (expect - qa[0]) / (qb[0] - qa[0]);
+    CHECK(std::fabs(h.d4[0] - frac) < 0.02);
+    CHECK(std::fabs(h.d4[1] - 0.92) < 0.05 && std::fabs(h.d4[3] - 0.5) < 0.05);
+  }
+  // the end poses alone touch nothing
+  int p4[16];
+  double pd[4];
+  int js[2] = {0, 1};
+  CHECK(cn_robot_set_joints(w, r, js, qa, 2) == 0);
+  CHECK(cn_object_contacts(w, r, 0, p4, pd, 4) == 0);
+  CHECK(cn_robot_set_joints(w, r, js, qb, 2) == 0);
+  CHECK(cn_object_contacts(w, r, 0, p4, pd, 4) == 0);
+  double zero[2] = {0, 0};
+  CHECK(cn_robot_set_joints(w, r, js, zero, 2) == 0);
+  CHECK(cn_robot_link_poses(w, r, poses_after, 3) == 3);
+
+  // the robot in the world is not moved by a sweep check
+  Rec h0 = robot_sweep(w, r, qa, qb);
+  double poses_now[21];
+  CHECK(cn_robot_link_poses(w, r, poses_now, 3) == 3);
+  CHECK(std::memcmp(poses_now, poses_after, sizeof poses_now) == 0);
+  CHECK(h0.n == 1);
+
+  // the other way round the post is not met; a turn that stops short is clear
+  double qc[2] = {-1, 0}, qd[2] = {-0.2, 0};
+  CHECK(robot_sweep(w, r, qc, qd).n == 0);
+  double qe[2] = {1, 0}, qf[2] = {2.5, 0};
+  CHECK(robot_sweep(w, r, qe, qf).n == 0);
+
+  // with the base raised by 1.1 m the bar passes above the post (top at 1.0)
+  double high[7] = {0, 0, 1.1, 0, 0, 0, 1};
+  CHECK(robot_sweep(w, r, qa, qb, nullptr, 0, 0.05, 0, high, high).n == 0);
+
+  // ignore lists: the bar against the post, the bar against anything, anything against the post
+  int ign1[4] = {r, 1, post, -1}, ign2[4] = {r, 1, -1, -1}, ign3[4] = {-1, -1, post, -1};
+  CHECK(robot_sweep(w, r, qa, qb, ign1, 1).n == 0);
+  CHECK(robot_sweep(w, r, qa, qb, ign2, 1).n == 0);
+  CHECK(robot_sweep(w, r, qa, qb, ign3, 1).n == 0);
+  int ign4[4] = {r, 2, post, -1};  // the finger: the bar still hits
+  CHECK(robot_sweep(w, r, qa, qb, ign4, 1).n == 1);
+  // ignored pairs of the world apply too
+  CHECK(cn_ignore_pair(w, r, 1, post, -1, 1) == 0);
+  CHECK(robot_sweep(w, r, qa, qb).n == 0);
+  CHECK(cn_ignore_pair(w, r, 1, post, -1, 0) == 0);
+
+  // contacts at the start: reported at fraction 0, or left out with the flag
+  double qs[2] = {0, 0}, qt[2] = {1.2, 0};
+  Rec s0 = robot_sweep(w, r, qs, qt);
+  CHECK(s0.n == 1 && s0.d4[0] == 0);
+  CHECK(robot_sweep(w, r, qs, qt, nullptr, 0, 0.05, CN_SWEEP_SKIP_START_CONTACTS).n == 0);
+
+  // a base turn with the bar out: the base turns by 2 rad about z
+  double turn0[7] = {0, 0, 0, 0, 0, std::sin(-0.5), std::cos(-0.5)};
+  double turn1[7] = {0, 0, 0, 0, 0, std::sin(0.5), std::cos(0.5)};
+  Rec bt = robot_sweep(w, r, zero, zero, nullptr, 0, 0.05, 0, turn0, turn1);
+  CHECK(bt.n == 1 && bt.i4[1] == 1 && std::fabs(bt.d4[0] - 0.5) < 0.1);
+  // the base driving 2 m sideways with the bar pointing along +x sweeps the post too
+  double side0[7] = {0, -1, 0, 0, 0, 0, 1}, side1[7] = {0, 1, 0, 0, 0, 0, 1};
+  Rec sd = robot_sweep(w, r, zero, zero, nullptr, 0, 0.05, 0, side0, side1);
+  CHECK(sd.n == 1 && std::fabs(sd.d4[0] - (1 - 0.07) / 2) < 0.01);
+
+  // attached objects move with their link and are reported under their own handle
+  double cup_pose[7] = {1.0, 0, 0.25, 0, 0, 0, 1};  // hangs under the bar's tip
+  int cup = cn_body_add_box(w, cup_pose, 0.06, 0.06, 0.2, 0.3);
+  CHECK(cup == 2);
+  CHECK(cn_attach(w, cup, r, 1, 0) == 0);
+  double low[7] = {0, 0, 0, 0, 0, 0, 1};
+  double far_post[7] = {0, 1.0, 0.1, 0, 0, 0, 1};  // low: only the cup reaches down to it
+  int stump = cn_body_add_box(w, far_post, 0.1, 0.1, 0.2, 0);
+  double q0[2] = {0.3, 0}, q1[2] = {2.0, 0};
+  Rec at = robot_sweep(w, r, q0, q1, nullptr, 0, 0.05, 0, low, low);
+  bool cup_hit = false;
+  for (int i = 0; i < at.n; ++i)
+    if (at.i4[4 * i] == cup && at.i4[4 * i + 2] == stump) cup_hit = true;
+  CHECK(cup_hit);
+  CHECK(cn_detach(w, cup, -1) == 1);
+  CHECK(cn_object_remove(w, cup) == 0);
+
+  // a plain body through a wall, and past it
+  double wall_pose[7] = {3, 0, 0.5, 0, 0, 0, 1};
+  int wall = cn_body_add_box(w, wall_pose, 0.02, 2, 1, 0);
+  double box_pose[7] = {2, 0, 0.5, 0, 0, 0, 1};
+  int box = cn_body_add_box(w, box_pose, 0.1, 0.1, 0.1, 1);
+  double from[7] = {2, 0, 0.5, 0, 0, 0, 1}, to[7] = {4, 0, 0.5, 0, 0, 0, 1};
+  Rec b;
+  b.n = cn_body_sweep_check(w, box, from, to, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16);
+  CHECK(b.n == 1 && b.i4[0] == box && b.i4[1] == -1 && b.i4[2] == wall);
+  CHECK(std::fabs(b.d4[0] - (0.94 / 2)) < 0.005);  // 3 - 0.01 - 0.05 - 2 = 0.94 of 2 m
+  double by[7] = {2, 3, 0.5, 0, 0, 0, 1}, by2[7] = {4, 3, 0.5, 0, 0, 0, 1};
+  CHECK(cn_body_sweep_check(w, box, by, by2, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == 0);
+  // capacity 0 counts only
+  CHECK(cn_body_sweep_check(w, box, from, to, nullptr, 0, 0.05, 1e-3, 0, nullptr, nullptr, 0) == 1);
+
+  // bad input: an error naming the value, never a crash
+  CHECK(cn_robot_sweep_check(w, 99, ID, qa, ID, qb, 2, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_HANDLE &&
+        strstr(cn_last_error(), "99"));
+  CHECK(cn_robot_sweep_check(w, box, ID, qa, ID, qb, 2, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_HANDLE);
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 3, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG &&
+        strstr(cn_last_error(), "3 values, expected 2"));
+  double nanq[2] = {NAN, 0};
+  CHECK(cn_robot_sweep_check(w, r, ID, nanq, ID, qb, 2, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG &&
+        strstr(cn_last_error(), "NaN"));
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 2, nullptr, 0, 0, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG &&
+        strstr(cn_last_error(), "maximum step"));
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 2, nullptr, 0, 0.05, -1, 0, b.i4, b.d4, 16) == CN_E_ARG);
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 2, nullptr, 0, 0.05, 1e-3, 8, b.i4, b.d4, 16) == CN_E_ARG &&
+        strstr(cn_last_error(), "flags 8"));
+  int bad_ign[4] = {r, 7, post, -1};
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 2, bad_ign, 1, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_HANDLE &&
+        strstr(cn_last_error(), "link 7"));
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, ID, qb, 2, nullptr, 1, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG);
+  double far[7] = {1e5, 0, 0, 0, 0, 0, 1};
+  CHECK(cn_robot_sweep_check(w, r, ID, qa, far, qb, 2, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG &&
+        strstr(cn_last_error(), "sub-steps"));
+  double zq[7] = {0, 0, 0, 0, 0, 0, 0};
+  CHECK(cn_body_sweep_check(w, box, zq, to, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_ARG);
+  CHECK(cn_body_sweep_check(w, r, from, to, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_HANDLE);
+  CHECK(cn_body_sweep_check(w, 0 + 1000, from, to, nullptr, 0, 0.05, 1e-3, 0, b.i4, b.d4, 16) == CN_E_HANDLE);
+  CHECK(cn_body_sweep_check(w, box, from, to, nullptr, 0, 0.05, 1e-3, 0, nullptr, b.d4, 4) == CN_E_ARG);
+
+  // seeded random bar moves against dense sampling of the path (2000 poses)
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-2.8, 2.8);
+  int missed = 0, false_alarms = 0, hits = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    double a[2] = {u(rng), u(rng) * 0.5}, c[2] = {u(rng), u(rng) * 0.5};
+    Rec s = robot_sweep(w, r, a, c);
+    bool sampled = false;
+    double deepest = 1;
+    for (int i = 0; i <= 2000; ++i) {
+      double t = i / 2000.0, q[2] = {a[0] + t * (c[0] - a[0]), a[1] + t * (c[1] - a[1])};
+      cn_robot_set_joints(w, r, js, q, 2);
+      double out7[7];
+      for (int body : {post, wall, stump}) {
+        if (cn_closest_distance(w, r, -1, body, -1, 1.0, out7) == 1) deepest = std::min(deepest, out7[0]);
+      }
+    }
+    sampled = deepest <= 0;
+    if (s.n > 0) ++hits;
+    if (deepest < -2e-3 && s.n == 0) ++missed;
+    if (deepest > 2e-3 && s.n > 0) ++false_alarms;
+    (void)sampled;
+  }
+  CHECK(missed == 0);
+  CHECK(false_alarms == 0);
+  CHECK(hits > 5 && hits < 55);
+
+  CHECK(cn_world_destroy(w) == 0);
+  printf("cn_sweep_check: %d checks, %d failed (random corpus: %d of 60 moves hit)\n", checks,
+         failures, hits);
+  return failures ? 1 : 0;
+}

@@ -1,0 +1,111 @@
+;;;; Projection pre-checks: before a manipulation is committed, its tool poses are tried in the
+;;;; belief state (inverse kinematics and collisions, as the motion itself would do) and the
+;;;; robot is put back; only a solution that works is performed.
+
+(in-package :cram-fetch-deliver-plans)
+
+(defparameter *picking-up-check-samples* 30
+  "How many (arm, grasp) solutions of a picking-up action the pre-check tries.")
+(defparameter *placing-check-samples* 20
+  "How many solutions of a placing target the pre-check tries.")
+
+(defun call-restoring-robot (thunk)
+  "Call THUNK and put the robot's base, joints and attached objects back afterwards."
+  (let* ((robot (btr:get-robot-object))
+         (base (btr:pose robot))
+         (state (btr:joint-states robot)))
+    (unwind-protect (funcall thunk)
+      (setf (btr:pose robot) base)
+      (btr:set-robot-state-from-joints state robot))))
+
+(defparameter *precheck-base-offsets* '(0d0 -0.1d0 0.1d0)
+  "The base offsets (metres) the pre-checks try, fewer than the motions do
+(URDF-PROJ::*BASE-OFFSETS*): a pre-check may reject what the motion would reach, never the
+reverse, and gives up an unreachable pose sooner.")
+
+(defparameter *precheck-torso-step* 0.15d0
+  "The step (metres) between the torso heights the pre-checks try, coarser than the motions'
+(URDF-PROJ::*TORSO-STEP*).")
+
+(defun tcp-poses-reachable-p (arm poses)
+  "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
+moving-tcp motion would (base offsets of *PRECHECK-BASE-OFFSETS*, torso heights
+*PRECHECK-TORSO-STEP* apart, collision check); the robot is put back."
+  (call-restoring-robot
+   (lambda ()
+     (handler-case
+         (let ((urdf-proj::*base-offsets* *precheck-base-offsets*)
+               (urdf-proj::*torso-step* *precheck-torso-step*))
+           (dolist (pose poses t)
+             (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
+       (common-fail:manipulation-low-level-failure () nil)))))
+
+(defun trajectory-reachable-p (arm trajectory labels)
+  (tcp-poses-reachable-p arm (loop for label in labels
+                                   append (man-int:get-traj-poses-by-label trajectory label))))
+
+(defun check-picking-up-collisions (object &key arms grasps)
+  "The first (arm grasp) of picking up OBJECT, for ARMS and GRASPS (NIL: any), whose grasp
+poses the arm reaches free of collisions, among up to *PICKING-UP-CHECK-SAMPLES*; signals
+OBJECT-UNREACHABLE when none does."
+  (let* ((?object object)
+         (groundings (pp-plans:ground-action
+                      :picking-up (desig:an action (type picking-up) (object ?object))))
+         (tried 0))
+    (dolist (grounding groundings)
+      (let* ((resolved (second grounding))
+             (arm (desig:desig-prop-value resolved :arm))
+             (grasp (desig:desig-prop-value resolved :grasp)))
+        (when (and (or (null arms) (member arm arms)) (or (null grasps) (member grasp grasps)))
+          (when (>= (incf tried) *picking-up-check-samples*) (return))
+          (when (pp-plans::with-object-being-grasped (object)
+                  (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
+                                          '(:grasping)))
+            (return-from check-picking-up-collisions (list arm grasp))))))
+    (cpl:fail 'common-fail:object-unreachable
+              :description (format nil "No grasp of ~a with the ~{~(~a~)~^ or ~} arm is reachable ~
+                                        free of collisions from here (~d tried)."
+                                   (object-text object) (or arms (pp-plans::robot-arms)) tried))))
+
+(defun check-placing-collisions (object arm target)
+  "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
+which ARM puts OBJECT down free of collisions (the designator of that solution); signals
+OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pose."
+  (let ((current target) (?object object) (?arm arm))
+    (loop repeat *placing-check-samples*
+          while current
+          do (let* ((?target current)
+                    (grounding (first (pp-plans:ground-action
+                                       :placing (desig:an action (type placing) (object ?object)
+                                                          (arm ?arm) (target ?target)))))
+                    (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
+               (when (pp-plans::with-object-being-placed (object current)
+                       (trajectory-reachable-p arm trajectory '(:putting)))
+                 (return-from check-placing-collisions current))
+               (setf current (desig:next-solution current))))
+    (cpl:fail 'common-fail:object-undeliverable
+              :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
+                                        ~a from here." (object-text object) arm target))))
+
+(defun object-visible-from-p (object pose)
+  "True when the robot, standing at POSE (map) and looking at OBJECT (an object designator of
+the belief state), sees it (BTR:OBJECT-VISIBLE-P, the neck clamped to its limits). Checked in
+the belief state; the robot is put back."
+  (let* ((name (designator-object-name object))
+         (o (and name (btr:object btr:*current-bullet-world* name))))
+    (or (null o)                        ; nothing to check against
+        (call-restoring-robot
+         (lambda ()
+           (let* ((robot (btr:get-robot-object))
+                  (joints (urdf-proj:neck-joints))
+                  (camera (urdf-proj:camera-frame robot)))
+             (setf (btr:pose robot) (pp-plans:pose-in-map pose))
+             ;; the neck solver passes through values beyond the limits: no warnings of those
+             (let ((values (handler-bind ((warning #'muffle-warning))
+                             (urdf-proj::neck-angles-towards robot joints camera
+                                                             (cl-transforms:origin (btr:pose o))))))
+               (btr:set-robot-state-from-joints
+                (mapcar (lambda (j v) (list j (urdf-proj::clamp-joint robot j v))) joints values)
+                robot))
+             (btr:object-visible-p btr:*current-bullet-world*
+                                   (btr:link-pose robot camera) o)))))))

@@ -1,0 +1,169 @@
+;;;; Tests of the household action layer (FD-PLANS): searching, fetching and delivering from
+;;;; given base poses, their failures and retries, in the kitchen of the belief state.
+
+(defpackage :cram-plans-tests-fetch-deliver
+  (:use :cl :fiveam))
+
+(in-package :cram-plans-tests-fetch-deliver)
+
+(def-suite fetch-deliver :in cram-plans-tests:all
+  :description "Searching, fetching, delivering and transporting (FD-PLANS).")
+(in-suite fetch-deliver)
+
+;;; Places and base poses in the kitchen (map frame).
+(defparameter *island* '(-0.8 0.76 0.9))
+(defparameter *sink* '(1.48 0.96 0.9))
+(defparameter *in-fridge* '(1.48 -1.16 0.55) "Behind the closed fridge door.")
+(defparameter *robot-at-island* (list -0.1 0.74 0 pi))
+(defparameter *robot-at-wall* (list -0.1 2.2 0 pi))
+(defparameter *robot-at-sink* '(0.8 0.7 0 0))
+(defparameter *robot-in-sink* '(1.0 0.7 0 0)
+  "A base pose overlapping the sink block: every navigation there is in collision.")
+
+(defun pose (x y z &optional (yaw 0))
+  (cl-transforms-stamped:make-pose-stamped
+   "map" 0d0 (cl-transforms:make-3d-vector x y z)
+   (cl-transforms:axis-angle->quaternion (cl-transforms:make-3d-vector 0 0 1) yaw)))
+
+(defun poses-location (&rest places)
+  "A location designator with the POSES of PLACES ((x y z [yaw])...)."
+  (let ((?poses (mapcar (lambda (p) (apply #'pose p)) places)))
+    (desig:a location (poses ?poses))))
+
+(defun setup (place &key (type :bottle))
+  "A fresh kitchen with the PR2 at the origin and one object of TYPE resting at PLACE."
+  (btw-tut:init-projection)
+  (destructuring-bind (x y z) place
+    (btr:add-object btr:*current-bullet-world* :mesh :object-1
+                    (cl-transforms:make-pose (cl-transforms:make-3d-vector x y z)
+                                             (cl-transforms:make-identity-rotation))
+                    :mesh type :mass 0.2 :types (list type)))
+  (btr:simulate btr:*current-bullet-world* 1))
+
+(defun object-position ()
+  (cl-transforms:origin (btr:pose (btr:object btr:*current-bullet-world* :object-1))))
+
+(defun run-plan (thunk)
+  "Run THUNK in projection with the log captured: (values result-or-condition log)."
+  (let* ((log (make-string-output-stream))
+         (result (let ((cpl:*log-stream* log))
+                   (handler-case (urdf-proj:with-simulated-robot (funcall thunk))
+                     (serious-condition (c) c)))))
+    (values result (get-output-stream-string log))))
+
+(defun search-action (place robot-poses)
+  (let ((?location (apply #'poses-location (list place)))
+        (?robot (apply #'poses-location robot-poses)))
+    (desig:an action (type searching) (object (desig:an object (type bottle)))
+              (location ?location) (robot-location ?robot))))
+
+(defun fetch-action (robot-poses &optional arms)
+  (let ((?robot (apply #'poses-location robot-poses)) (?arms arms))
+    (desig:an action (type fetching) (object (desig:an object (type bottle) (name object-1)))
+              (robot-location ?robot) (desig:when ?arms (arms ?arms)))))
+
+(defun deliver-action (targets robot-poses)
+  (let ((?target (apply #'poses-location targets))
+        (?robot (apply #'poses-location robot-poses)))
+    (desig:an action (type delivering) (object (desig:an object (type bottle) (name object-1)))
+              (target ?target) (robot-location ?robot))))
+
+(defun held-p ()
+  (fd-plans::object-held-p :object-1))
+
+(test search-finds-the-object-in-view
+  (setup *island*)
+  (multiple-value-bind (result log) (run-plan (lambda () (exe:perform (search-action *island* (list *robot-at-island*)))))
+    (is (typep result 'desig:object-designator) "search failed: ~a" result)
+    (is (eq :object-1 (desig:desig-prop-value result :name)))
+    (is (not (search "WARN" log)) "a happy search logs no failure:~%~a" log)
+    ;; the robot stands where it was sent
+    (is (< (cl-transforms:v-dist (cl-transforms:origin (btr:pose (btr:get-robot-object)))
+                                 (cl-transforms:make-3d-vector -0.1 0.74 0))
+           1d-3))))
+
+(test search-for-an-object-behind-a-closed-door-fails
+  (setup *in-fridge*)
+  (multiple-value-bind (result log)
+      (run-plan (lambda () (exe:perform (search-action *in-fridge*
+                                                       (list *robot-at-wall* *robot-at-island*)))))
+    (is (typep result 'common-fail:searching-failed) "got ~a" result)
+    ;; both robot poses were tried
+    (is (search "Retrying with the next solution of ?ROBOT-LOCATION" log))))
+
+(test search-from-a-colliding-base-pose-fails-with-navigation-collision
+  (setup *sink*)
+  (multiple-value-bind (result log)
+      (run-plan (lambda () (exe:perform (search-action *sink* (list *robot-in-sink*)))))
+    (is (typep result 'common-fail:searching-failed) "got ~a" result)
+    (is (search "NAVIGATION-GOAL-IN-COLLISION" log))
+    ;; the pre-check never moved the robot into the sink
+    (is (< (cl-transforms:v-norm (cl-transforms:origin (btr:pose (btr:get-robot-object)))) 1d-3))))
+
+(test search-retries-the-next-robot-pose
+  (setup *sink*)
+  (multiple-value-bind (result log)
+      (run-plan (lambda () (exe:perform (search-action *sink* (list *robot-in-sink* *robot-at-sink*)))))
+    (is (typep result 'desig:object-designator) "got ~a" result)
+    (is (search "collides with" log))
+    ;; the robot stands at the second, free pose
+    (is (< (cl-transforms:v-dist (cl-transforms:origin (btr:pose (btr:get-robot-object)))
+                                 (cl-transforms:make-3d-vector 0.8 0.7 0))
+           1d-3))))
+
+(test fetch-from-the-island
+  (setup *island*)
+  (let ((result (run-plan (lambda () (exe:perform (fetch-action (list *robot-at-island*)))))))
+    (is (typep result 'desig:object-designator) "fetch failed: ~a" result)
+    (is (held-p))
+    ;; the object left the island with the hand
+    (is (> (cl-transforms:z (object-position)) 0.95))))
+
+(test fetch-out-of-reach-fails
+  (setup *island*)
+  (let ((result (run-plan (lambda () (exe:perform (fetch-action (list *robot-at-wall*)))))))
+    (is (typep result 'common-fail:fetching-failed) "got ~a" result)
+    (is (not (held-p)))))
+
+(test fetch-relocates-to-the-next-base-pose
+  (setup *island*)
+  (let ((result (run-plan (lambda () (exe:perform (fetch-action (list *robot-at-wall* *robot-at-island*)))))))
+    (is (typep result 'desig:object-designator) "got ~a" result)
+    (is (held-p))))
+
+(defun fetched-at-island ()
+  (setup *island*)
+  (let ((result (run-plan (lambda () (exe:perform (fetch-action (list *robot-at-island*)))))))
+    (unless (held-p) (error "The object could not be fetched for a delivery test: ~a" result))))
+
+(test deliver-to-the-sink
+  (fetched-at-island)
+  (let ((result (run-plan (lambda () (exe:perform (deliver-action (list *sink*) (list *robot-at-sink*)))))))
+    (is (typep result 'desig:object-designator) "got ~a" result)
+    (is (not (held-p)))
+    (is (< (cl-transforms:v-dist (object-position) (apply #'cl-transforms:make-3d-vector *sink*))
+           0.08))))
+
+(test deliver-to-an-unreachable-target-fails
+  (fetched-at-island)
+  (let ((result (run-plan (lambda () (exe:perform (deliver-action (list *sink*) (list *robot-at-island*)))))))
+    (is (typep result 'common-fail:delivering-failed) "got ~a" result)
+    (is (held-p) "the object stays in the hand")))
+
+(test deliver-tries-the-next-target
+  (fetched-at-island)
+  (let ((result (run-plan (lambda () (exe:perform (deliver-action (list *sink* *island*)
+                                                              (list *robot-at-island*)))))))
+    (is (typep result 'desig:object-designator) "got ~a" result)
+    (is (< (cl-transforms:v-dist (object-position) (apply #'cl-transforms:make-3d-vector *island*))
+           0.08))))
+
+(test bad-input-names-the-value
+  (setup *island*)
+  (signals desig:designator-error
+    (desig:reference (desig:an action (type fetching) (object 42))))
+  (signals desig:designator-error
+    (desig:reference (desig:an action (type searching))))
+  (let ((?location 'kitchen-table))
+    (signals desig:designator-error
+      (desig:reference (desig:an action (type navigating) (location ?location))))))

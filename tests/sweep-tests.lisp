@@ -1,0 +1,341 @@
+;;;; Tests of the sweep checks: what the simulated robot passes through between key poses
+;;;; (cram-native:robot-sweep-check and urdf-proj:*sweep-check*).
+
+(defpackage :cram-plans-tests.sweep
+  (:use :cl :fiveam))
+
+(in-package :cram-plans-tests.sweep)
+
+(def-suite sweep :in cram-plans-tests:all
+  :description "Sweep checks between key poses: native sweeps, motions under :warn and :fail.")
+
+(in-suite sweep)
+
+(defvar *resources* (asdf:system-relative-pathname "cram-plans/cram-urdf-projection" "resources/"))
+(defvar *robots* (asdf:system-relative-pathname "cram-plans/cram-urdf-projection" "robots/"))
+
+(defparameter *right-park* '(-1.712587449591307d0 -0.2567290370386635d0 -1.4633501125737374d0
+                             -2.1221670650093913d0 1.7663253481913623d0 -0.07942669250968948d0
+                             0.05106258161229582d0))
+(defparameter *right-out* '(-0.4d0 0d0 0d0 -0.15d0 0d0 -0.1d0 0d0)
+  "The right arm stretched out forwards.")
+
+(defun make-open-world (&key kitchen)
+  "A fresh world: the floor and the PR2 at the origin (and the kitchen with KITCHEN)."
+  (rob-int:set-robot-name :pr2)
+  (setf btr:*current-bullet-world* (make-instance 'btr:bt-reasoning-world))
+  (let ((w btr:*current-bullet-world*))
+    (btr:add-object w :static-plane :floor '((0 0 0) (0 0 0 1)) :normal '(0 0 1) :constant 0)
+    (when kitchen
+      (btr:add-object w :urdf :iai-kitchen '((0 0 0) (0 0 0 1))
+                      :urdf (uiop:read-file-string (merge-pathnames "iai_kitchen.urdf" *resources*))
+                      :collision-group :static-filter
+                      :collision-mask '(:default-filter :character-filter)))
+    (btr:add-object w :urdf :pr2 '((0 0 0) (0 0 0 1))
+                    :urdf (uiop:read-file-string (merge-pathnames "pr2/pr2.urdf" *robots*)))
+    w))
+
+(defmacro with-open-world ((&key kitchen) &body body)
+  `(let ((btr:*current-bullet-world* btr:*current-bullet-world*)
+         (rob-int:*robot-name* rob-int:*robot-name*)
+         (urdf-proj:*sweep-check* urdf-proj:*sweep-check*))
+     (make-open-world :kitchen ,kitchen)
+     ,@body))
+
+(defun robot () (btr:get-robot-object))
+
+(defun set-right-arm (values)
+  (btr:set-robot-state-from-joints (mapcar #'list (urdf-proj:arm-joint-names :right) values) (robot)))
+
+(defun right-arm () (mapcar (lambda (j) (btr:joint-state (robot) j)) (urdf-proj:arm-joint-names :right)))
+
+(defun mix (a b f) (mapcar (lambda (x y) (+ x (* f (- y x)))) a b))
+
+(defun point-on-link (link x)
+  "The map point X metres along LINK's x axis."
+  (cl-transforms:transform-point (cl-transforms:pose->transform (btr:link-pose (robot) link))
+                                 (cl-transforms:make-3d-vector x 0 0)))
+
+(defun add-box (name point size)
+  (let ((p point))
+    (btr:add-object btr:*current-bullet-world* :box name
+                    `((,(cl-transforms:x p) ,(cl-transforms:y p) ,(cl-transforms:z p)) (0 0 0 1))
+                    :size size :mass 0)))
+
+(defun robot-touches (name)
+  (member name (urdf-proj:robot-collisions)))
+
+(defun add-board ()
+  "A board where the right forearm passes half way from park to stretched out, touching the
+arm at neither end."
+  (set-right-arm (mix *right-park* *right-out* 0.5))
+  (add-box 'board (point-on-link "r_forearm_link" 0.2) '(0.3 0.3 0.02))
+  (set-right-arm *right-park*)
+  'board)
+
+(defun recorded-sweeps (thunk)
+  "Call THUNK; return the sweeps reported meanwhile (oldest first) and THUNK's outcome, a
+condition or :OK."
+  (let* ((seen '())
+         (urdf-proj:*sweep-hooks* (cons (lambda (s) (push s seen)) urdf-proj:*sweep-hooks*))
+         (outcome (handler-case (progn (funcall thunk) :ok)
+                    (cpl:plan-failure (f) f))))
+    (values (reverse seen) outcome)))
+
+;;; ---- the native call ---------------------------------------------------------------------------
+
+(test native-robot-sweep-check-finds-the-board
+  (with-open-world ()
+    (add-board)
+    (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (base (cram-native:object-pose w r))
+           (q0 (cram-native:robot-joints w r)))
+      (is (null (robot-touches 'board)))
+      (set-right-arm *right-out*)
+      (is (null (robot-touches 'board)))
+      (let* ((q1 (cram-native:robot-joints w r))
+             (hits (cram-native:robot-sweep-check w r base q0 base q1))
+             (board (btr:object-handle (btr:object btr:*current-bullet-world* 'board))))
+        (is (plusp (length hits)))
+        (is (every (lambda (h) (= (third h) board)) hits))
+        (is (member "r_forearm_link" hits :test #'string=
+                                          :key (lambda (h) (btr::link-name-of (robot) (second h)))))
+        (is (every (lambda (h) (< 0 (fifth h) 1)) hits))
+        ;; the robot in the world stays where it was
+        (is (every #'= q1 (cram-native:robot-joints w r)))
+        ;; the other way back finds it as well, and ignoring the board hides it
+        (is (plusp (length (cram-native:robot-sweep-check w r base q1 base q0))))
+        (is (null (cram-native:robot-sweep-check w r base q0 base q1 :ignore (list (list -1 -1 board -1)))))))))
+
+(test native-sweep-check-bad-input
+  (with-open-world ()
+    (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (base (cram-native:object-pose w r)) (q (cram-native:robot-joints w r)))
+      (flet ((message (thunk)
+               (handler-case (progn (funcall thunk) nil)
+                 (cram-native:native-error (e) (princ-to-string e)))))
+        (is (search "expected" (message (lambda () (cram-native:robot-sweep-check w r base '(1 2) base '(1 2))))))
+        (is (search "maximum step is 0" (message (lambda () (cram-native:robot-sweep-check w r base q base q :max-step 0)))))
+        (is (search ":BOGUS" (message (lambda () (cram-native:robot-sweep-check w r base q base q :ignore '(:bogus))))))
+        (is (search "foo" (message (lambda () (cram-native:robot-sweep-check w r base q base q :tolerance "foo")))))
+        (is (search "12345" (message (lambda () (cram-native:robot-sweep-check w 12345 base q base q)))))
+        (is (search "(1 2 3)" (message (lambda () (cram-native:body-sweep-check w r '(1 2 3) base)))))))))
+
+;;; ---- motions under *sweep-check* -----------------------------------------------------------
+
+(test board-swept-by-the-forearm-warns
+  (with-open-world ()
+    (add-board)
+    (setf urdf-proj:*sweep-check* :warn)
+    (let ((log (make-string-output-stream)))
+      (multiple-value-bind (sweeps outcome)
+          (let ((cpl:*log-stream* log))
+            (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*))))
+        (is (eq :ok outcome))
+        (is (every (lambda (a b) (< (abs (- a b)) 1d-6)) *right-out* (right-arm)))
+        (is (plusp (length sweeps)))
+        (is (every (lambda (s) (eq 'board (urdf-proj:sweep-hit s))) sweeps))
+        (is (find "r_forearm_link" sweeps :key #'urdf-proj:sweep-moving-link :test #'equal))
+        (let ((lines (remove-if-not (lambda (l) (search "SWEEP" l))
+                                    (uiop:split-string (get-output-stream-string log) :separator '(#\Newline)))))
+          (is (= 1 (length lines)))
+          (is (search "board" (first lines)))
+          (is (search "of the way" (first lines))))))))
+
+(test board-swept-by-the-forearm-fails-and-stays
+  (with-open-world ()
+    (add-board)
+    (setf urdf-proj:*sweep-check* :fail)
+    (multiple-value-bind (sweeps outcome) (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))
+      (is (typep outcome 'common-fail:manipulation-pose-unreachable))
+      (let ((text (princ-to-string outcome)))
+        (is (search "board" text))
+        (is (search "_link" text))
+        (is (search "of the way" text)))
+      (is (plusp (length sweeps)))
+      (is (every (lambda (a b) (< (abs (- a b)) 1d-9)) *right-park* (right-arm))))
+    ;; nothing is checked with NIL
+    (setf urdf-proj:*sweep-check* nil)
+    (multiple-value-bind (sweeps outcome) (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))
+      (is (eq :ok outcome))
+      (is (null sweeps)))))
+
+(test allowed-contacts-are-not-reported
+  (with-open-world ()
+    (add-board)
+    (setf urdf-proj:*sweep-check* :fail)
+    (multiple-value-bind (sweeps outcome)
+        (recorded-sweeps (lambda ()
+                           (urdf-proj:with-allowed-sweep-contacts ((list t 'board))
+                             (urdf-proj:move-joints nil *right-out*))))
+      (is (eq :ok outcome))
+      (is (null sweeps)))
+    ;; allowing one link only leaves the others' sweeps
+    (set-right-arm *right-park*)
+    (multiple-value-bind (sweeps outcome)
+        (recorded-sweeps (lambda ()
+                           (urdf-proj:with-allowed-sweep-contacts ('("r_forearm_link" board))
+                             (urdf-proj:move-joints nil *right-out*))))
+      (declare (ignore outcome))
+      (is (not (find "r_forearm_link" sweeps :key #'urdf-proj:sweep-moving-link :test #'equal))))
+    (set-right-arm *right-park*)
+    (let ((urdf-proj:*sweep-allowed-contacts* '(("no_such_link" board))))
+      (signals error (urdf-proj:move-joints nil *right-out*)))
+    (set-right-arm *right-park*)
+    (let ((urdf-proj:*sweep-allowed-contacts* '((t no-such-object))))
+      (handler-case (progn (urdf-proj:move-joints nil *right-out*) (fail "no error"))
+        (error (e) (is (search "NO-SUCH-OBJECT" (princ-to-string e))))))))
+
+(test carried-object-through-the-board
+  (with-open-world ()
+    (set-right-arm (mix *right-park* *right-out* 0.5))
+    (let ((palm (btr:link-pose (robot) "r_gripper_tool_frame")))
+      (add-box 'board (cl-transforms:v+ (cl-transforms:origin palm) (cl-transforms:make-3d-vector 0 0 -0.2))
+               '(0.3 0.3 0.02)))
+    (set-right-arm *right-park*)
+    ;; a stick held in the hand reaching 0.3 m down
+    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
+      (btr:add-object btr:*current-bullet-world* :box 'stick
+                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
+                      :size '(0.02 0.02 0.3) :mass 0.1)
+      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (setf urdf-proj:*sweep-check* :warn)
+    (is (null (urdf-proj:robot-collisions)))
+    (let ((sweeps (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))))
+      (is (find 'stick sweeps :key #'urdf-proj:sweep-moving))
+      (is (every (lambda (s) (or (urdf-proj:sweep-moving-link s) (eq 'stick (urdf-proj:sweep-moving s)))) sweeps)))))
+
+(test base-turn-with-an-outstretched-arm-only-warns
+  (with-open-world ()
+    (set-right-arm *right-out*)
+    ;; a post that the stretched-out hand meets when the base turns 90 degrees to the right
+    (let* ((hand (point-on-link "r_gripper_palm_link" 0.1))
+           (r (sqrt (+ (expt (cl-transforms:x hand) 2) (expt (cl-transforms:y hand) 2))))
+           (a (- (atan (cl-transforms:y hand) (cl-transforms:x hand)) 0.6)))
+      (add-box 'post (cl-transforms:make-3d-vector (* r (cos a)) (* r (sin a)) 0.5) '(0.08 0.08 1.0)))
+    (is (null (urdf-proj:robot-collisions)))
+    (setf urdf-proj:*sweep-check* :fail)
+    (let ((goal (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                         (cl-transforms:axis-angle->quaternion (cl-transforms:make-3d-vector 0 0 1) (/ pi -2)))))
+      (multiple-value-bind (sweeps outcome) (recorded-sweeps (lambda () (urdf-proj:drive goal)))
+        (is (eq :ok outcome))
+        (is (plusp (length sweeps)))
+        (is (every (lambda (s) (and (eq :base (urdf-proj:sweep-kind s)) (eq 'post (urdf-proj:sweep-hit s)))) sweeps))
+        (is (< 0.1 (urdf-proj:sweep-fraction (first sweeps)) 0.6))
+        (is (< (abs (- (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose (robot)))) (/ pi -2))) 1d-6))))))
+
+(test arc-past-a-post-that-a-straight-line-check-misses
+  ;; the shoulder pan turns the stretched-out arm through 1.6 rad; a post stands near the
+  ;; outermost point of the hand's arc, off the straight line between its two end positions
+  (with-open-world ()
+    (let* ((q0 (cons -1.6d0 (rest *right-out*))) (q1 (cons 0.0d0 (rest *right-out*)))
+           (mid (cons -0.8d0 (rest *right-out*))))
+      (set-right-arm q0)
+      (let ((p0 (point-on-link "r_gripper_palm_link" 0.1)))
+        (set-right-arm q1)
+        (let ((p1 (point-on-link "r_gripper_palm_link" 0.1)))
+          (set-right-arm mid)
+          (let* ((pm (point-on-link "r_gripper_palm_link" 0.1))
+                 (chord (cl-transforms:v* (cl-transforms:v+ p0 p1) 0.5)))
+            ;; the arc's middle lies well outside the chord's
+            (is (> (cl-transforms:v-dist pm chord) 0.15))
+            (add-box 'post pm '(0.04 0.04 0.04))
+            (set-right-arm q0)
+            ;; a straight-line check: the palm point moving on the chord stays clear of the post
+            (is (loop for k from 0 to 100
+                      for f = (/ k 100d0)
+                      for p = (cl-transforms:v+ p0 (cl-transforms:v* (cl-transforms:v- p1 p0) f))
+                      always (> (cl-transforms:v-dist p pm) 0.1)))
+            (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+                   (base (cram-native:object-pose w r)) (a (cram-native:robot-joints w r)))
+              (set-right-arm q1)
+              (let ((hits (cram-native:robot-sweep-check w r base a base (cram-native:robot-joints w r)
+                                                         :max-step 2d0)))
+                (is (plusp (length hits)))
+                (is (< 0.3 (fifth (first hits)) 0.7))))))))))
+
+(test clear-reach-near-the-table-reports-nothing
+  ;; seed 000's plan in the kitchen, under :FAIL: it reaches over the table, grasps, lifts and
+  ;; places the bottle, and no motion's path hits anything
+  (let ((btr:*current-bullet-world* btr:*current-bullet-world*)
+        (urdf-proj:*sweep-check* :fail)
+        (cpl:*log-stream* (make-broadcast-stream)))
+    (btw-tut:init-projection)
+    (multiple-value-bind (sweeps outcome) (recorded-sweeps (lambda () (btw-tut:move-bottle)))
+      (is (eq :ok outcome))
+      (is (null sweeps) "sweeps: ~{~a~^; ~}" (mapcar #'urdf-proj:sweep-description sweeps)))))
+
+(test sweeps-in-the-task-tree-and-the-replay
+  (with-open-world ()
+    (add-board)
+    (setf urdf-proj:*sweep-check* :warn)
+    (let ((cpl:*log-stream* (make-broadcast-stream))
+          (cram-viewer:*record-runs* t))
+      (cpl:top-level
+        (cpl:with-task-tree-node (:motion "moving-arm-joints")
+          (urdf-proj:move-joints nil *right-out*))))
+    (let ((nodes (cpl:find-task-tree-nodes (lambda (n) (eq :sweep (cpl:node-kind n))))))
+      (is (= 1 (length nodes)))
+      (is (search "board" (cpl:node-designator (first nodes))))
+      (is (search "\"sweep\"" (cpl:task-tree-to-json))))
+    ;; the replay's step of the motion holds the sweeps: path, first contact and fraction
+    (let* ((run (cram-viewer::last-run))
+           (step (aref (cram-viewer:run-steps run) (1- (length (cram-viewer:run-steps run)))))
+           (sweeps (remove-if-not (lambda (o) (equal "sweep" (gethash "type" o))) (cram-viewer::step-overlays step))))
+      (is (plusp (length sweeps)))
+      (dolist (o sweeps)
+        (is (= 17 (length (gethash "path" o))))
+        (is (= 3 (length (gethash "point" o))))
+        (is (< 0 (gethash "fraction" o) 1))
+        (is (search "board" (gethash "hit" o))))
+      (let ((json (cram-viewer::json-string (cram-viewer::run-json run))))
+        (is (search "\"type\":\"sweep\"" json))
+        (is (search "\"fraction\"" json))))))
+
+;;; ---- a seeded corpus against dense ground truth -----------------------------------------------
+
+(defun random-arm (state)
+  (loop for j in (urdf-proj:arm-joint-names :right)
+        collect (multiple-value-bind (lo hi) (btr:joint-limits (robot) j)
+                  (let ((lo (or lo -3d0)) (hi (or hi 3d0)))
+                    (+ lo (random (- hi lo) state))))))
+
+(defun deepest (obstacles)
+  "The smallest distance of the robot to any of OBSTACLES (objects) now."
+  (let ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot))))
+    (loop for o in obstacles
+          minimize (cram-native:closest-distance w r (btr:object-handle o) :max-distance 0.5d0))))
+
+(test random-arm-moves-against-dense-ground-truth
+  (with-open-world ()
+    (let* ((state (sb-ext:seed-random-state 22))
+           (obstacles (loop for (name x y z sx sy sz) in '((shelf 0.55 -0.45 0.75 0.4 0.5 0.02)
+                                                          (post 0.45 -0.85 0.6 0.06 0.06 1.2)
+                                                          (crate 0.75 -0.2 0.45 0.25 0.25 0.25)
+                                                          (lamp 0.3 -0.6 1.3 0.1 0.1 0.1))
+                            collect (add-box name (cl-transforms:make-3d-vector x y z) (list sx sy sz))))
+           (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (base (cram-native:object-pose w r))
+           (floor (btr:object-handle (btr:object btr:*current-bullet-world* :floor)))
+           (moves 0) (with-contact 0) (missed 0) (false-alarms 0) (samples 4000))
+      (loop while (< moves 40)
+            do (let ((a (random-arm state)) (b (random-arm state)))
+                 (set-right-arm a)
+                 (when (> (deepest obstacles) 0.002)
+                   (let ((qa (cram-native:robot-joints w r)))
+                     (set-right-arm b)
+                     (when (> (deepest obstacles) 0.002)
+                       (incf moves)
+                       (let* ((qb (cram-native:robot-joints w r))
+                              (found (cram-native:robot-sweep-check w r base qa base qb :ignore (list (list -1 -1 floor -1))))
+                              (truth (loop for k from 0 to samples
+                                           minimize (progn (set-right-arm (mix a b (/ k (float samples 1d0))))
+                                                           (deepest obstacles)))))
+                         (when (<= truth 0) (incf with-contact))
+                         ;; a contact deeper than the tolerance must be found; nothing is
+                         ;; reported that stays clear by more than the sampling's resolution
+                         (when (and (< truth -0.002) (null found)) (incf missed))
+                         (when (and (> truth 0.002) found) (incf false-alarms))))))))
+      (is (= 0 missed))
+      (is (= 0 false-alarms))
+      (is (< 5 with-contact 38) "~d of ~d moves touch" with-contact moves))))
