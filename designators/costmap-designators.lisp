@@ -214,6 +214,11 @@ every solution contributes and they are merged.  Extendable: add rules that buil
 (defvar *designator-costmaps* (make-hash-table :test 'eq :weakness :key :synchronized t)
   "Location designator -> its merged costmap (or :NONE).")
 
+(defparameter *max-cached-costmaps* 128
+  "How many designators' costmaps *DESIGNATOR-COSTMAPS* keeps: designators live on in task
+trees and recorded runs, so the cache is emptied when it is full rather than when they go (a
+costmap whose designator asks again is built again).")
+
 (defun designator-costmap (designator)
   "The merged costmap of all DESIG-COSTMAP solutions of the location DESIGNATOR, or NIL when it
 has none; computed once per designator.  A Lisp error while a costmap is built (an unknown
@@ -226,16 +231,25 @@ robot, object or link) is signalled, not turned into a failing goal."
                                                     (cut:force-ll
                                                      (prolog `(desig-costmap ,designator ?costmap)))))))
                     (merged (and costmaps (merge-costmaps costmaps))))
+               (when (>= (hash-table-count *designator-costmaps*) *max-cached-costmaps*)
+                 (clrhash *designator-costmaps*))
                (setf (gethash designator *designator-costmaps*) (or merged :none))
                merged)))))
 
 (defun costmap-location-generator (designator)
   "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged
-costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies."
+costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies or the costmap is 0
+everywhere."
   (let ((costmap (designator-costmap designator)))
     ;; the costmap visualization shows the costmap last sampled (BTR:CLEAR-COSTMAP-VIS-OBJECT)
     (when costmap (btr:add-costmap-function-object costmap))
-    (if costmap (costmap-samples costmap) nil)))
+    ;; a costmap that is 0 everywhere (nothing fits) has no candidates: the designator then
+    ;; has no solution (a DESIGNATOR-ERROR, which plans retry), not a Lisp error
+    (and costmap
+         (handler-case (let ((samples (costmap-samples costmap)))
+                         (cut:lazy-car samples)
+                         samples)
+           (invalid-probability-distribution () nil)))))
 
 (desig:register-location-generator 20 costmap-location-generator
   "Samples of the location costmap of the designator (DESIG-COSTMAP).")

@@ -160,6 +160,44 @@ condition or :OK."
       (is (eq :ok outcome))
       (is (null sweeps)))))
 
+(test tool-frame-motion-through-the-board-fails-and-stays
+  (with-open-world ()
+    (set-right-arm *right-out*)
+    (let ((goal (btr:link-pose (robot) (urdf-proj:tool-frame :right)))
+          (solution nil))
+      ;; the arm configuration the tool-frame motion reaches from park; the board goes where
+      ;; the forearm passes half way there
+      (set-right-arm *right-park*)
+      (let ((urdf-proj:*sweep-check* nil))
+        (urdf-proj:move-tcp nil goal :move-base nil :fixed-torso t))
+      (setf solution (right-arm))
+      ;; the first placement along the way that touches the arm at neither end
+      (is (loop for (f x) in (loop for f in '(0.5 0.4 0.6 0.3 0.7) append (loop for x in '(0.2 0.1 0.3) collect (list f x)))
+                thereis (progn
+                          (set-right-arm (mix *right-park* solution f))
+                          (add-box 'board (point-on-link "r_forearm_link" x) '(0.1 0.1 0.02))
+                          (set-right-arm solution)
+                          (let ((clear-at-end (null (robot-touches 'board))))
+                            (set-right-arm *right-park*)
+                            (or (and clear-at-end (null (robot-touches 'board)))
+                                (progn (btr:remove-object btr:*current-bullet-world* 'board) nil))))))
+      (setf urdf-proj:*sweep-check* :fail)
+      ;; one candidate only (no base offsets, no torso change): its path crosses the board
+      (multiple-value-bind (sweeps outcome)
+          (recorded-sweeps (lambda () (urdf-proj:move-tcp nil goal :move-base nil :fixed-torso t)))
+        (is (typep outcome 'common-fail:manipulation-pose-unreachable))
+        (is (search "board" (princ-to-string outcome)))
+        (is (plusp (length sweeps)))
+        (is (every (lambda (s) (eq :tcp (urdf-proj:sweep-kind s))) sweeps))
+        (is (every (lambda (a b) (< (abs (- a b)) 1d-9)) *right-park* (right-arm))))
+      ;; under :warn the same motion moves and reports
+      (setf urdf-proj:*sweep-check* :warn)
+      (let ((cpl:*log-stream* (make-broadcast-stream)))
+        (multiple-value-bind (sweeps outcome)
+            (recorded-sweeps (lambda () (urdf-proj:move-tcp nil goal :move-base nil :fixed-torso t)))
+          (is (eq :ok outcome))
+          (is (plusp (length sweeps))))))))
+
 (test allowed-contacts-are-not-reported
   (with-open-world ()
     (add-board)
@@ -181,6 +219,10 @@ condition or :OK."
     (set-right-arm *right-park*)
     (let ((urdf-proj:*sweep-allowed-contacts* '(("no_such_link" board))))
       (signals error (urdf-proj:move-joints nil *right-out*)))
+    (set-right-arm *right-park*)
+    (let ((urdf-proj:*sweep-check* :loud))
+      (handler-case (progn (urdf-proj:move-joints nil *right-out*) (fail "no error"))
+        (error (e) (is (search ":LOUD" (princ-to-string e))))))
     (set-right-arm *right-park*)
     (let ((urdf-proj:*sweep-allowed-contacts* '((t no-such-object))))
       (handler-case (progn (urdf-proj:move-joints nil *right-out*) (fail "no error"))

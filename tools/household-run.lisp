@@ -61,7 +61,8 @@ VARIED is NIL). Returns a plist: :success, :failure (the condition's class or
     (seed-everything seed)
     (btw-tut:init-projection)
     (let ((cpl:*log-stream* log-stream))
-      (handler-case (demos:household-demo :object-list object-types :varied-kitchen varied)
+      (handler-case (demos:household-demo :object-list object-types :varied-kitchen varied
+                                          :seed seed)
         (serious-condition (e)
           (setf failure (string-downcase (symbol-name (type-of e)))
                 error (or (ignore-errors (princ-to-string e)) failure)))))

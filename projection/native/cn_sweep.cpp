@@ -10,126 +10,14 @@
 // pieces cannot reach the object (distance at its start beyond its path bound) is clear, one
 // whose start is at or below distance 0 is the first contact. A pair is reported only where a
 // computed distance is <= 0, and missed only when it never penetrates deeper than `tolerance`.
-#include "cn_internal.hpp"
-
-#include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
-#include <algorithm>
+// The sub-steps (a power of two) are visited from the whole move down by halving, each mover's
+// box over an interval sorting out the candidates it can meet there; a pair found apart by d is
+// not looked at again before the move could have closed d (conservative advancement).
+#include "cn_sweep.hpp"
 
 namespace cn {
 namespace {
-
-// The convex hull of a convex shape at two placements (world coordinates), grown by `grow`.
-class SweptHull : public btConvexInternalShape {
- public:
-  const btConvexShape *child = nullptr;
-  btTransform a, b;
-  double grow = 0;
-  SweptHull() { m_shapeType = CUSTOM_CONVEX_SHAPE_TYPE; }
-  void set(const btConvexShape *c, const btTransform &ta, const btTransform &tb, double g) {
-    child = c;
-    a = ta;
-    b = tb;
-    grow = g;
-    setMargin(c->getMargin() + g);
-  }
-  btVector3 localGetSupportingVertexWithoutMargin(const btVector3 &d) const override {
-    btVector3 pa = a * child->localGetSupportingVertexWithoutMargin(d * a.getBasis());
-    btVector3 pb = b * child->localGetSupportingVertexWithoutMargin(d * b.getBasis());
-    return pa.dot(d) >= pb.dot(d) ? pa : pb;
-  }
-  void batchedUnitVectorGetSupportingVertexWithoutMargin(const btVector3 *v, btVector3 *out,
-                                                         int n) const override {
-    for (int i = 0; i < n; ++i) out[i] = localGetSupportingVertexWithoutMargin(v[i]);
-  }
-  void getAabb(const btTransform &t, btVector3 &lo, btVector3 &hi) const override {
-    btVector3 l2, h2;
-    child->getAabb(t * a, lo, hi);
-    child->getAabb(t * b, l2, h2);
-    lo.setMin(l2);
-    hi.setMax(h2);
-    btVector3 g(grow, grow, grow);
-    lo -= g;
-    hi += g;
-  }
-  void calculateLocalInertia(btScalar, btVector3 &inertia) const override {
-    inertia.setValue(0, 0, 0);
-  }
-  const char *getName() const override { return "SweptHull"; }
-};
-
-// The smallest distance (and where) between a probe and one object, from contactPairTest.
-struct Closest : btCollisionWorld::ContactResultCallback {
-  double best;
-  btVector3 point{0, 0, 0};
-  bool found = false;
-  explicit Closest(double maxd) : best(maxd) { m_closestDistanceThreshold = maxd > 0 ? maxd : 0; }
-  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *, int, int,
-                           const btCollisionObjectWrapper *, int, int) override {
-    double d = cp.getDistance();
-    if (d <= best) {
-      best = d;
-      point = (cp.getPositionWorldOnA() + cp.getPositionWorldOnB()) * 0.5;
-      found = true;
-    }
-    return 0;
-  }
-};
-
-struct Piece {                    // one convex piece of a moving body, in the body frame
-  const btConvexShape *shape;
-  btTransform local;
-};
-
-struct Mover {                    // a moving robot link, attached object or body
-  int obj = -1, link = -1;        // as reported
-  const btCollisionObject *co = nullptr;
-  int frame_link = -1;            // robot link it hangs from; -1: the base (or the body itself)
-  btTransform rel;                // its frame relative to that link (or the base)
-  std::vector<int> chain;         // movable joints from the root to frame_link
-  std::vector<Piece> pieces;
-  double radius = 0;              // bound on |point - frame origin| over its shape
-  double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
-  std::vector<const btCollisionObject *> candidates;
-  std::vector<char> done;         // per candidate: reported, or left out (start contact)
-  std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
-};
-
-struct Hit {
-  int obj, link, hobj, hlink;
-  double t;
-  btVector3 point;
-  bool operator<(const Hit &o) const {
-    if (t != o.t) return t < o.t;
-    return std::array<int, 4>{obj, link, hobj, hlink} < std::array<int, 4>{o.obj, o.link, o.hobj, o.hlink};
-  }
-};
-
-// Bullet's bounding radius of a shape about its frame origin (from its local box).
-double shape_radius(const btCollisionShape *s) {
-  btVector3 lo, hi;
-  s->getAabb(btTransform::getIdentity(), lo, hi);
-  double r2 = 0;
-  for (int k = 0; k < 8; ++k) {
-    btVector3 c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
-    r2 = std::max(r2, (double)c.length2());
-  }
-  return std::sqrt(r2);
-}
-
-// The movable joints on the way from the root to LINK, root first.
-void link_chain(const Model &m, int link, std::vector<int> &out) {
-  out.clear();
-  for (int l = link; l >= 0;) {
-    int pj = m.links[l].parent_joint;
-    if (pj < 0) break;
-    int type = m.joints[pj].type;
-    if (type == CN_JOINT_REVOLUTE || type == CN_JOINT_CONTINUOUS || type == CN_JOINT_PRISMATIC)
-      out.push_back(pj);
-    l = m.joints[pj].parent;
-  }
-  std::reverse(out.begin(), out.end());
-}
-
+using namespace sweep;
 
 struct Sweep {
   World &w;
@@ -147,14 +35,13 @@ struct Sweep {
   int n_ignore = 0;
   double tol = 1e-3;
   bool skip_start = false;
-  btCollisionObject probe, hull_probe;
+  btCollisionObject probe;
   SweptHull hull;
   std::vector<Hit> hits;
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
         skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {
-    hull_probe.setCollisionShape(&hull);
     sync_aabbs(w);
   }
 
@@ -360,9 +247,7 @@ struct Sweep {
       btVector3 lo, hi;
       hull.getAabb(btTransform::getIdentity(), lo, hi);
       if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
-      Closest c(0);
-      w.dw->contactPairTest(&hull_probe, const_cast<btCollisionObject *>(other), c);
-      if (c.found && c.best <= 0) return true;
+      if (convex_distance(&hull, btTransform::getIdentity(), other, 1e-9) <= 0) return true;
     }
     return false;
   }
@@ -375,9 +260,17 @@ struct Sweep {
     return c;
   }
 
-  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther).
+  // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther): from GJK
+  // on its pieces, and where that finds a touch, from Bullet's contact query, which also gives
+  // the POINT of contact (the one the discrete checks use).
   double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
                      btVector3 *point = nullptr) {
+    double d = maxd;
+    for (const Piece &p : m.pieces) {
+      d = std::min(d, convex_distance(p.shape, t * p.local, other, d));
+      if (d <= 0) break;
+    }
+    if (d > 0) return d;
     Closest c = distance(m, t, maxd, other);
     if (point) *point = c.point;
     return c.found ? c.best : maxd;
@@ -562,8 +455,8 @@ struct Sweep {
       // apart by d at ta stays apart until ta + d / B
       if (ta >= m.clear_until[c]) {
         double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
-        Closest d0 = distance(m, slot_pose[a], probe_d, other);
-        double d = d0.found ? d0.best : probe_d;
+        btVector3 at_point;
+        double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
         if (ka == 0 && skip_start && d <= tol) {
           m.done[c] = 1;
           continue;
@@ -572,7 +465,7 @@ struct Sweep {
           m.done[c] = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
-          hits.push_back({m.obj, m.link, ob, lb, ta, d0.point});
+          hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
           continue;
         }
         m.clear_until[c] = ta + d / m.B;

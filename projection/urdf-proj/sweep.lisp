@@ -208,9 +208,10 @@ states); ROBOT is left where it is."
 AFTER (default: where it is now), leaving out the contacts it starts from, arrives at on
 purpose, those of IGNORE-LINKS (link names) and, with IGNORE-ATTACHED, of its carried objects,
 and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not move."
+  (unless (member *sweep-check* '(nil :warn :fail))
+    (projection-error "URDF-PROJ:*SWEEP-CHECK* is ~s, expected NIL, :WARN or :FAIL." *sweep-check*))
   (when *sweep-check*
-    (progn
-      (unless (same-state-p before after)
+    (unless (same-state-p before after)
         (let* ((world (btr:world robot))
                (ignore (append (allowed-contact-records world robot)
                                (floor-records world)
@@ -219,15 +220,16 @@ and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not
                (records (cram-native:robot-sweep-check (btr:world-handle world) (btr:object-handle robot)
                                                   (car before) (cdr before) (car after) (cdr after)
                                                   :ignore ignore :skip-start-contacts t)))
-          ;; pairs are independent: the contacts arrived at on purpose are taken out afterwards
-          (when records
+          ;; pairs are independent: the contacts arrived at on purpose (where the robot now is,
+          ;; the end of the motion) are taken out afterwards
+          (when (and records (same-state-p after (robot-state-vectors robot)))
             (let ((arrivals (arrival-contact-records world robot)))
               (setf records (remove-if (lambda (r) (member (subseq r 0 4) arrivals :test #'equal))
                                        records))))
           (when records
             (fill-sweep-paths robot before after
                               (mapcar (lambda (r) (sweep-from-record world robot label kind r))
-                                      records))))))))
+                                      records)))))))
 
 (defun sweeps-text (sweeps)
   (format nil "~a~@[ (and ~d more)~]" (sweep-description (first sweeps))

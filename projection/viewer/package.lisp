@@ -10,7 +10,8 @@
    ;; scene descriptions and states
    #:object-descriptor #:world-scene #:world-state #:mesh-table
    ;; recording
-   #:*record-runs* #:*max-recorded-runs* #:*max-steps-per-run* #:recorded-runs #:last-run
+   #:*record-runs* #:*max-recorded-runs* #:*max-steps-per-run* #:*max-recorded-steps*
+   #:*max-runs-with-costmaps* #:recorded-runs #:last-run
    #:find-run #:clear-runs #:run-id #:run-steps #:run-label #:run-root #:step-label
    #:step-index #:step-failed-p #:record-motion #:run-json #:step-object-pose
    ;; overlays

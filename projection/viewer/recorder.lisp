@@ -105,7 +105,35 @@ but the last few).")
           (push new *runs*)
           (when (> (length *runs*) *max-recorded-runs*)
             (setf *runs* (subseq *runs* 0 *max-recorded-runs*)))
+          (drop-runs-beyond-step-budget)
+          (drop-old-costmaps)
           new))))
+
+(defvar *max-recorded-steps* 2000
+  "How many steps the recorded runs together keep: when a new run starts, the oldest runs are
+dropped until the others hold at most this many (a long household run records hundreds of
+steps, each with the task tree node it belongs to).")
+
+(defun drop-runs-beyond-step-budget ()
+  "Drop the oldest recorded runs (never the newest) while the runs hold more than
+*MAX-RECORDED-STEPS* steps."
+  (loop while (and (rest *runs*)
+                   (> (reduce #'+ *runs* :key (lambda (r) (fill-pointer (run-steps r))))
+                      *max-recorded-steps*))
+        do (setf *runs* (butlast *runs*))))
+
+(defvar *max-runs-with-costmaps* 2
+  "How many of the newest recorded runs keep the costmaps of their location designators (a
+costmap is a grid of doubles; a household run samples hundreds): older runs keep the samples.")
+
+(defun drop-old-costmaps ()
+  "Forget the costmaps of the overlays of all but the *MAX-RUNS-WITH-COSTMAPS* newest runs, so
+that recording many long runs stays bounded."
+  (dolist (run (nthcdr *max-runs-with-costmaps* *runs*))
+    (loop for step across (run-steps run)
+          do (dolist (overlay (step-overlays step))
+               (when (and (hash-table-p overlay) (gethash "costmap" overlay))
+                 (setf (gethash "costmap" overlay) nil))))))
 
 (defun record-motion (label &optional (world btr:*current-bullet-world*))
   "Record the state of WORLD after the motion LABEL as a step of the current run (see

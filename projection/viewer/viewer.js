@@ -414,7 +414,9 @@ var CramViewer = (function () {
       self.setOverlays(Object.keys(latest).map(function (t) { return latest[t]; }).concat(sweepsOf(s)));
       label.textContent = "step " + (i + 1) + "/" + steps.length + ": " + s.label + (s.failed ? " (failed)" : "") +
         "  +" + s.offset.toFixed(3) + " s" +
-        sweepsOf(s).map(function (o) { return " — sweeps " + o.text; }).join("");
+        (function (sw) {   // the first contact of the motion's path, and how many more
+          return sw.length ? " — sweeps " + sw[0].text + (sw.length > 1 ? " (and " + (sw.length - 1) + " more)" : "") : "";
+        })(sweepsOf(s).slice().sort(function (a, b) { return a.fraction - b.fraction; }));
       label.className = s.failed ? "label failed" : "label";
       Object.keys(nodes).forEach(function (id) { nodes[id].classList.remove("current"); });
       if (s.node && nodes[s.node]) { nodes[s.node].classList.add("current"); nodes[s.node].scrollIntoView({ block: "nearest" }); }

@@ -50,6 +50,8 @@ location of its type in CONTEXT."
                     `((:location ,location)
                       (:see ,(let ((see (prop d :see)))
                                (and see (object-designator-or-error see :navigating d))))
+                      (:grasp ,(let ((grasp (prop d :grasp)))
+                                 (and grasp (object-designator-or-error grasp :navigating d))))
                       (:park-arms ,(if (eq (prop d :park-arms :unset) :unset) t
                                        (prop d :park-arms))))))))
 

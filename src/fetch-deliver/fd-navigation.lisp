@@ -37,18 +37,20 @@ with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none."
               :description (format nil "No solution of ~a is free of collisions for the robot."
                                    location))))
 
-(defun navigate (&key location (park-arms t) see &allow-other-keys)
+(defun navigate (&key location (park-arms t) see grasp &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
 (NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
-given) is visible, and drive there. A low-level navigation failure is logged and ignored, as
-on a real base that plans around obstacles."
+given) is visible and the object designator GRASP (when given) can be grasped, and drive there.
+A low-level navigation failure is logged and ignored, as on a real base that plans around
+obstacles."
   (when park-arms
     (exe:perform (desig:an action (type parking-arms))))
   (let ((?location (desig:current-desig
                     (check-navigating-collisions
-                     location :accept (if see
-                                          (lambda (pose) (object-visible-from-p see pose))
-                                          (constantly t))))))
+                     location :accept (lambda (pose)
+                                        (and (or (null see) (object-visible-from-p see pose))
+                                             (or (null grasp)
+                                                 (object-graspable-from-p grasp pose))))))))
     (handler-case
         (exe:perform (desig:an action (type going) (target ?location)))
       (common-fail:navigation-low-level-failure (e)

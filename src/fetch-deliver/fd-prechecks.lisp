@@ -27,22 +27,25 @@ reverse, and gives up an unreachable pose sooner.")
   "The step (metres) between the torso heights the pre-checks try, coarser than the motions'
 (URDF-PROJ::*TORSO-STEP*).")
 
-(defun tcp-poses-reachable-p (arm poses)
+(defun tcp-poses-reachable-p (arm poses &key (coarse t))
   "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
-moving-tcp motion would (base offsets of *PRECHECK-BASE-OFFSETS*, torso heights
-*PRECHECK-TORSO-STEP* apart, collision check); the robot is put back."
+moving-tcp motion would (base offsets, torso heights, collision check; with COARSE, only the
+base offsets of *PRECHECK-BASE-OFFSETS* and torso heights *PRECHECK-TORSO-STEP* apart); the
+robot is put back."
   (call-restoring-robot
    (lambda ()
      (handler-case
-         (let ((urdf-proj::*base-offsets* *precheck-base-offsets*)
-               (urdf-proj::*torso-step* *precheck-torso-step*))
+         (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
+                                              urdf-proj::*base-offsets*))
+               (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*)))
            (dolist (pose poses t)
              (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
        (common-fail:manipulation-low-level-failure () nil)))))
 
-(defun trajectory-reachable-p (arm trajectory labels)
+(defun trajectory-reachable-p (arm trajectory labels &key (coarse t))
   (tcp-poses-reachable-p arm (loop for label in labels
-                                   append (man-int:get-traj-poses-by-label trajectory label))))
+                                   append (man-int:get-traj-poses-by-label trajectory label))
+                         :coarse coarse))
 
 (defun check-picking-up-collisions (object &key arms grasps)
   "The first (arm grasp) of picking up OBJECT, for ARMS and GRASPS (NIL: any), whose grasp
@@ -60,7 +63,7 @@ OBJECT-UNREACHABLE when none does."
           (when (>= (incf tried) *picking-up-check-samples*) (return))
           (when (pp-plans::with-object-being-grasped (object)
                   (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
-                                          '(:grasping)))
+                                          '(:grasping) :coarse nil))
             (return-from check-picking-up-collisions (list arm grasp))))))
     (cpl:fail 'common-fail:object-unreachable
               :description (format nil "No grasp of ~a with the ~{~(~a~)~^ or ~} arm is reachable ~
@@ -109,3 +112,13 @@ the belief state; the robot is put back."
                 robot))
              (btr:object-visible-p btr:*current-bullet-world*
                                    (btr:link-pose robot camera) o)))))))
+
+(defun object-graspable-from-p (object pose &key arms grasps)
+  "True when the robot, standing at POSE (map), reaches a grasp of OBJECT with one of ARMS and
+GRASPS (NIL: any) free of collisions (CHECK-PICKING-UP-COLLISIONS). Checked in the belief
+state; the robot is put back."
+  (call-restoring-robot
+   (lambda ()
+     (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
+     (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps) t)
+       (common-fail:object-unreachable () nil)))))

@@ -38,8 +38,11 @@ properties ((key value) ...) appended."
 
 (defun bowl-reference (environment human context)
   "The bowl where it goes in CONTEXT: spoons and cups go next to it."
-  (desig:make-designator :object `((:type :bowl)
-                                   (:location ,(man-int:get-object-destination :bowl environment human context)))))
+  ;; a call of its own: the bowl's location is for a bowl, whatever type asked
+  (let ((man-int::*requested-object-type* nil))
+    (desig:make-designator :object `((:type :bowl)
+                                     (:location ,(man-int:get-object-destination
+                                                  :bowl environment human context))))))
 
 ;;; ---- likely locations ---------------------------------------------------------------------
 

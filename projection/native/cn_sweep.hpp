@@ -1,0 +1,130 @@
+// The pieces of the sweep checks (cn_sweep.cpp): the swept hull shape, the distance callback,
+// the moving bodies and the contacts found.
+#pragma once
+#include "cn_internal.hpp"
+
+#include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
+#include <algorithm>
+
+namespace cn {
+namespace sweep {
+
+// The convex hull of a convex shape at two placements (world coordinates), grown by `grow`.
+class SweptHull : public btConvexInternalShape {
+ public:
+  const btConvexShape *child = nullptr;
+  btTransform a, b;
+  double grow = 0;
+  SweptHull() { m_shapeType = CUSTOM_CONVEX_SHAPE_TYPE; }
+  void set(const btConvexShape *c, const btTransform &ta, const btTransform &tb, double g) {
+    child = c;
+    a = ta;
+    b = tb;
+    grow = g;
+    setMargin(c->getMargin() + g);
+  }
+  btVector3 localGetSupportingVertexWithoutMargin(const btVector3 &d) const override {
+    btVector3 pa = a * child->localGetSupportingVertexWithoutMargin(d * a.getBasis());
+    btVector3 pb = b * child->localGetSupportingVertexWithoutMargin(d * b.getBasis());
+    return pa.dot(d) >= pb.dot(d) ? pa : pb;
+  }
+  void batchedUnitVectorGetSupportingVertexWithoutMargin(const btVector3 *v, btVector3 *out,
+                                                         int n) const override {
+    for (int i = 0; i < n; ++i) out[i] = localGetSupportingVertexWithoutMargin(v[i]);
+  }
+  void getAabb(const btTransform &t, btVector3 &lo, btVector3 &hi) const override {
+    btVector3 l2, h2;
+    child->getAabb(t * a, lo, hi);
+    child->getAabb(t * b, l2, h2);
+    lo.setMin(l2);
+    hi.setMax(h2);
+    btVector3 g(grow, grow, grow);
+    lo -= g;
+    hi += g;
+  }
+  void calculateLocalInertia(btScalar, btVector3 &inertia) const override {
+    inertia.setValue(0, 0, 0);
+  }
+  const char *getName() const override { return "SweptHull"; }
+};
+
+// The smallest distance (and where) between a probe and one object, from contactPairTest.
+struct Closest : btCollisionWorld::ContactResultCallback {
+  double best;
+  btVector3 point{0, 0, 0};
+  bool found = false;
+  explicit Closest(double maxd) : best(maxd) { m_closestDistanceThreshold = maxd > 0 ? maxd : 0; }
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *, int, int,
+                           const btCollisionObjectWrapper *, int, int) override {
+    double d = cp.getDistance();
+    if (d <= best) {
+      best = d;
+      point = (cp.getPositionWorldOnA() + cp.getPositionWorldOnB()) * 0.5;
+      found = true;
+    }
+    return 0;
+  }
+};
+
+struct Piece {                    // one convex piece of a moving body, in the body frame
+  const btConvexShape *shape;
+  btTransform local;
+};
+
+struct Mover {                    // a moving robot link, attached object or body
+  int obj = -1, link = -1;        // as reported
+  const btCollisionObject *co = nullptr;
+  int frame_link = -1;            // robot link it hangs from; -1: the base (or the body itself)
+  btTransform rel;                // its frame relative to that link (or the base)
+  std::vector<int> chain;         // movable joints from the root to frame_link
+  std::vector<Piece> pieces;
+  double radius = 0;              // bound on |point - frame origin| over its shape
+  double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
+  std::vector<const btCollisionObject *> candidates;
+  std::vector<char> done;         // per candidate: reported, or left out (start contact)
+  std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
+};
+
+struct Hit {
+  int obj, link, hobj, hlink;
+  double t;
+  btVector3 point;
+  bool operator<(const Hit &o) const {
+    if (t != o.t) return t < o.t;
+    return std::array<int, 4>{obj, link, hobj, hlink} < std::array<int, 4>{o.obj, o.link, o.hobj, o.hlink};
+  }
+};
+
+// Bullet's bounding radius of a shape about its frame origin (from its local box).
+inline double shape_radius(const btCollisionShape *s) {
+  btVector3 lo, hi;
+  s->getAabb(btTransform::getIdentity(), lo, hi);
+  double r2 = 0;
+  for (int k = 0; k < 8; ++k) {
+    btVector3 c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    r2 = std::max(r2, (double)c.length2());
+  }
+  return std::sqrt(r2);
+}
+
+// The movable joints on the way from the root to LINK, root first.
+inline void link_chain(const Model &m, int link, std::vector<int> &out) {
+  out.clear();
+  for (int l = link; l >= 0;) {
+    int pj = m.links[l].parent_joint;
+    if (pj < 0) break;
+    int type = m.joints[pj].type;
+    if (type == CN_JOINT_REVOLUTE || type == CN_JOINT_CONTINUOUS || type == CN_JOINT_PRISMATIC)
+      out.push_back(pj);
+    l = m.joints[pj].parent;
+  }
+  std::reverse(out.begin(), out.end());
+}
+
+// The smallest distance, searched up to MAXD (MAXD when nothing is nearer), between the convex
+// A at TA and the collision object OTHER; <= 0 when they touch (not a penetration depth).
+double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
+                       double maxd);
+
+}  // namespace sweep
+}  // namespace cn
