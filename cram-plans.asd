@@ -129,6 +129,7 @@ points in polygons (package CRAM-MATH, CMA)."
 
 (defsystem "cram-plans/cram-walker"
   :description "A code walker that expands plans into plan trees (package CRAM-WALKER, WALKER)."
+  :depends-on ("alexandria")
   :pathname "src/walker/"
   :serial t
   :components ((:file "package")

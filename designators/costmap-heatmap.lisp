@@ -75,3 +75,6 @@ Returns PATH."
     (ensure-directories-exist path)
     (cram-native:write-png (namestring path) rgb w h)
     path))
+
+(setf (documentation 'occupancy-bits 'function)
+      "The bit array of an OCCUPANCY-GRID: 1 for an occupied cell, row = y index.")

@@ -87,3 +87,21 @@ random state."
              (y (cell-center-y costmap row))
              (heights (generate-heights costmap x y)))
         (cl-transforms:make-3d-vector x y (elt heights (random (length heights) random-state)))))))
+
+(setf (documentation 'cost-functions 'function)
+      "The cost functions of a costmap: entries (name function score), applied by ascending score."
+      (documentation 'height-generators 'function)
+      "The height generators of a costmap, functions (x y) returning lists of heights."
+      (documentation 'orientation-generators 'function)
+      "The orientation generators of a costmap, functions (x y previous-orientations).")
+
+(setf (documentation 'origin-x 'function) "The map x of the corner of cell (0 0) of a costmap or occupancy grid."
+      (documentation 'origin-y 'function) "The map y of the corner of cell (0 0) of a costmap or occupancy grid."
+      (documentation 'resolution 'function) "The size of the cells of a costmap or occupancy grid, in metres."
+      (documentation 'width 'function) "The extent of a costmap along x in metres."
+      (documentation 'height 'function) "The extent of a costmap along y in metres."
+      (documentation 'costmap-columns 'function) "The number of cells of a costmap along x."
+      (documentation 'costmap-rows 'function) "The number of cells of a costmap along y."
+      (documentation 'cost-function-name 'function) "The name of a COST-FUNCTION."
+      (documentation 'cost-function-bounds 'function)
+      "NIL, or (x-min y-min x-max y-max) outside which a COST-FUNCTION is 0.")

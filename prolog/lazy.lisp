@@ -126,6 +126,8 @@ A step whose BODY returns without one of them ends the list (as (FINISH))."
   ((function :initarg :function :reader lazy-list-type-error-function)
    (datum :initarg :datum :reader lazy-list-type-error-datum))
   (:default-initargs :format-control "Expected a list or a lazy list." :format-arguments '())
+  (:documentation "A lazy-list function was given something that is neither a list nor a lazy
+list (a SIMPLE-ERROR, as CRAM's LAZY-MAPCAN signals).")
   (:report (lambda (c s)
              (let ((*print-length* 10) (*print-level* 4))
                (format s "~s: expected a list or a lazy list, got ~s."

@@ -168,3 +168,8 @@ one-sided comparison)."
          (and (patterns-eq (car pattern-1) (car pattern-2))
               (patterns-eq (cdr pattern-1) (cdr pattern-2))))
         (t (eql pattern-1 pattern-2))))
+
+(setf (documentation 'lazy-tail-p 'function)
+      "True for the unexpanded end of a lazy list."
+      (documentation 'unbound-variable-error-variable 'function)
+      "The pattern variable an UNBOUND-VARIABLE-ERROR is about.")

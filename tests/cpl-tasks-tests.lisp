@@ -122,3 +122,6 @@
   (is (= 11 *tasks-test-counter*))
   (is (typep *cpl-parameter-*tasks-test-counter** 'cpl:fluent))
   (is (= 11 (cpl:value *cpl-parameter-*tasks-test-counter**))))
+
+(test tags-are-found-outside-data-only
+  (is (equal '(a b) (cpl::tag-names '((:tag a (:tag b 1)) '(:tag quoted 2) `(:tag ,(list 3)))))))

@@ -55,7 +55,9 @@
                          (walker-plan-c) (walker-top-plan)))))
       (is (walker:plan-tree-node-p fetch))
       (is (equal '(:tag fetch (list 1 2 3)) (walker:plan-tree-node-sexp fetch))))
-    (is (null (walker:find-plan-node tree '((walker::tagged nowhere)))))))
+    (is (null (walker:find-plan-node tree '((walker::tagged nowhere)))))
+    (signals simple-error (walker:find-plan-node tree 42))
+    (signals simple-error (walker:find-plan-node 42 '()))))
 
 (test walk-with-tag-handler-reports-tags-in-order
   (flet ((tags (form)

@@ -19,7 +19,9 @@
     (proj:clock-wait clock 2.5)
     (is (= 102.5 (proj:clock-time clock)))
     (signals error (proj:clock-wait clock -1))
-    (signals error (proj:clock-wait clock "soon"))))
+    (signals error (proj:clock-wait clock "soon"))
+    (signals simple-error (proj:clock-wait :not-a-clock 1))
+    (signals simple-error (proj:clock-time 42))))
 
 (test partially-ordered-clock-overlaps-parallel-waits
   (let ((clock (make-instance 'proj:partially-ordered-clock :increment-delay 0.05))

@@ -82,6 +82,17 @@ the checkout's out/, which belongs to the user; its namestring."
                             (concatenate 'string (namestring work) name)))))
     (namestring work)))
 
+(defun remove-scratch-links (work)
+  "Unlink the links MAKE-SCRATCH-CHECKOUT made in WORK (never what they point to)."
+  (let ((checkout (asdf:system-source-directory "cram-plans")))
+    (dolist (entry (append (uiop:directory-files checkout) (uiop:subdirectories checkout)))
+      (let* ((name (if (uiop:directory-pathname-p entry)
+                       (car (last (pathname-directory entry)))
+                       (file-namestring entry)))
+             (link (concatenate 'string work name)))
+        (when (ignore-errors (sb-posix:s-islnk (sb-posix:stat-mode (sb-posix:lstat link))))
+          (sb-posix:unlink link))))))
+
 (defun readme-start (run name program args &key input)
   "Start PROGRAM in the run's scratch copy of the checkout (see MAKE-SCRATCH-CHECKOUT), output
 to NAME.log in the run's directory; the process (and its log path)."
@@ -230,6 +241,7 @@ starting over does (its node would otherwise go on publishing its belief state's
                             (end-session run)))))
                (is (null left) "processes left running after the README's ROS blocks: ~s" left))))
       (end-session run)
+      (remove-scratch-links (readme-run-work run))
       (uiop:delete-directory-tree (uiop:ensure-directory-pathname dir) :validate t
                                                                        :if-does-not-exist :ignore))
     (let* ((results (reverse (readme-run-results run)))

@@ -15,11 +15,9 @@
 (defun seed-directory () (asdf:system-relative-pathname "cram-plans/tests/base" "tests/seeds/"))
 
 (defvar *seed-log-directory*
-  (uiop:ensure-directory-pathname
-   (merge-pathnames (format nil "cram-plans-seeds-~d/" (sb-unix:unix-getpid))
-                    (uiop:temporary-directory)))
-  "Where the seed replays' logs go: a temporary folder of this test run (the checkout's out/
-belongs to the user).")
+  (merge-pathnames "cram-plans-seed-logs/" (uiop:temporary-directory))
+  "Where the seed replays' logs go: one temporary folder whose logs each run replaces (the
+checkout's out/ belongs to the user).")
 
 (defun run-seed (number)
   "Replay seed NUMBER in a fresh SBCL. Returns its exit code, its `seed NNN: K/N blocks' line

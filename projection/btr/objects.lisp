@@ -30,7 +30,9 @@ connect to the fixed frame is an error naming it."
   (let ((frame (cl-transforms-stamped:frame-id pose-stamped))
         (fixed cram-tf:*fixed-frame*))
     (flet ((same-frame-p (a b)
-             (string= (string-left-trim "/" a) (string-left-trim "/" b))))
+             ;; "/map" and "map" name the same frame; compared without copying the strings
+             (string= a b :start1 (or (position #\/ a :test-not #'char=) (length a))
+                          :start2 (or (position #\/ b :test-not #'char=) (length b)))))
       (cond ((same-frame-p frame fixed) pose-stamped)
             ((and (typep cram-tf:*transformer* 'cl-transforms-stamped:transformer)
                   (cl-transforms-stamped:can-transform cram-tf:*transformer* fixed frame))

@@ -148,3 +148,11 @@ when GOAL's first argument is a variable (?w), it is that world."
     (not (bound ?time))
     (occurs-in ?timeline ?_ ?time)
     (holds-at ?timeline ?goal ?time)))
+
+(setf (documentation 'event 'function) "The pattern describing an EVENT."
+      (documentation 'event-world-state 'function) "The world state an EVENT left."
+      (documentation 'timestamp 'function) "When an EVENT happened (seconds)."
+      (documentation 'occurs-in 'function)
+      "Prolog predicate (occurs-in ?timeline ?event ?time): ?event happened at ?time."
+      (documentation 'holds-at 'function)
+      "Prolog predicate (holds-at ?timeline ?goal ?time): ?goal held in the world at ?time.")

@@ -92,3 +92,20 @@ included); PARSE-URDF of the text gives an equal model. Links and joints come in
     (dolist (joint-name (robot-joint-names robot))
       (write-joint (gethash joint-name (joints robot)) out))
     (format out "</robot>~%")))
+
+(setf (documentation 'name 'function) "The name of a URDF robot, link or joint."
+      (documentation 'links 'function) "Hash table of a robot's links by name."
+      (documentation 'joints 'function) "Hash table of a robot's joints by name."
+      (documentation 'root-link 'function) "The link of a robot that has no parent joint."
+      (documentation 'source 'function) "The URDF text a robot was parsed from."
+      (documentation 'collision 'function) "A link's collision shapes: plists (:origin :geometry)."
+      (documentation 'visual 'function) "A link's visual shapes: plists (:origin :geometry :color)."
+      (documentation 'parent-joint 'function) "The joint whose child a link is, or NIL."
+      (documentation 'child-joints 'function) "The joints whose parent a link is."
+      (documentation 'joint-type 'function) "A joint's type keyword (:revolute, :prismatic ...)."
+      (documentation 'parent 'function) "The parent link of a joint."
+      (documentation 'child 'function) "The child link of a joint."
+      (documentation 'origin 'function) "A joint's origin ((x y z) (qx qy qz qw)) in its parent link."
+      (documentation 'axis 'function) "A joint's unit axis (x y z)."
+      (documentation 'limits 'function) "A joint's limits plist (:lower :upper :velocity :effort), or NIL."
+      (documentation 'mimic 'function) "A joint's mimic plist (:joint :multiplier :offset), or NIL.")

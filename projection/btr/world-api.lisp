@@ -72,3 +72,16 @@ is itself attached to (items attached to each other may touch)."
         thereis (and held
                      (let ((allowed (cons (name robot) (mapcar #'first (attached-objects held)))))
                        (set-difference (find-objects-in-contact world held) allowed)))))
+
+(setf (documentation 'clear-bullet-world 'function)
+      "Prolog predicate (clear-bullet-world): the current world becomes a new, empty one;
+(clear-bullet-world ?world): ?world is a new, empty world.")
+
+(setf (documentation 'item-types 'function) "The item types (keywords) of an object, e.g. (:BOTTLE)."
+      (documentation 'name 'function) "The name of an object of a Bullet world (a symbol)."
+      (documentation 'object-handle 'function) "The native handle of an object of a Bullet world."
+      (documentation 'object-kind 'function) "The ADD-OBJECT type keyword an object was made with."
+      (documentation 'object-spec 'function) "The ADD-OBJECT keys an object was made with."
+      (documentation 'world 'function) "The Bullet world an object lives in."
+      (documentation 'world-handle 'function) "The native handle of a Bullet world."
+      (documentation 'world-lock 'function) "The lock that serialises the native calls on a world.")

@@ -186,3 +186,6 @@ for one of them is signalled here (a plan failure with CPL:FAIL)."
               (cpl:fail (car failure))
               (error (car failure))))
         t))))
+
+(setf (documentation 'asynchronous-process-module-name 'function)
+      "The name (or alias) a running asynchronous process module runs under.")

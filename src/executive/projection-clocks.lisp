@@ -6,11 +6,18 @@
 (in-package :cram-projection)
 
 (defgeneric clock-time (clock)
-  (:documentation "The current time of CLOCK, in seconds."))
+  (:documentation "The current time of CLOCK, in seconds.")
+  (:method ((clock t))
+    (error "CLOCK-TIME: ~s is not a clock (e.g. a LINEAR-CLOCK or PARTIALLY-ORDERED-CLOCK)."
+           clock)))
 
 (defgeneric clock-wait (clock duration)
   (:documentation "Wait DURATION seconds of CLOCK: afterwards CLOCK-TIME is at least DURATION
-more than before."))
+more than before.")
+  (:method ((clock t) duration)
+    (declare (ignore duration))
+    (error "CLOCK-WAIT: ~s is not a clock (e.g. a LINEAR-CLOCK or PARTIALLY-ORDERED-CLOCK)."
+           clock)))
 
 (defun check-duration (duration function)
   (unless (and (realp duration) (>= duration 0) (< duration most-positive-fixnum))

@@ -203,14 +203,14 @@ status fluent, and record it in the task tree as a :TAG node."
                                     (t :evaporated))))))
 
 (defun tag-names (body)
-  "The names of the (:TAG name ...) forms in BODY, outside quoted data, in order."
+  "The names of the (:TAG name ...) forms in BODY, outside quoted and backquoted data, in
+order (a :TAG list whose name is not a symbol is data, not a tag)."
   (let ((names '()))
     (labels ((walk (form)
                (when (consp form)
-                 (cond ((eq (car form) 'quote))
-                       ((and (eq (car form) :tag) (consp (cdr form)))
-                        (unless (and (cadr form) (symbolp (cadr form)))
-                          (error "WITH-TAGS: the tag name ~s is not a symbol." (cadr form)))
+                 (cond ((member (car form) '(quote sb-int:quasiquote)))
+                       ((and (eq (car form) :tag) (consp (cdr form))
+                             (cadr form) (symbolp (cadr form)))
                         (pushnew (cadr form) names)
                         (mapc #'walk (cddr form)))
                        (t (loop for rest on form

@@ -109,3 +109,7 @@ normalised matrix, e.g. a costmap's, is a distribution)."
 (defun radians->degrees (radians)
   "RADIANS in degrees."
   (* 180 (/ radians pi)))
+
+(setf (documentation 'x 'function) "The x coordinate of a 2D-POINT."
+      (documentation 'y 'function) "The y coordinate of a 2D-POINT."
+      (documentation 'vertices 'function) "The corners of a POLYGON, as a vector of 2D-POINTs.")

@@ -39,6 +39,10 @@ CHILDREN in the order they appear."
 (defun find-plan-node (plan-tree path)
   "The node of PLAN-TREE at PATH (innermost step first, as PLAN-TREE-NODE-PATH gives it, relative
 to the root); NIL when there is none."
+  (unless (and (listp path) (alexandria:proper-list-p path))
+    (error "FIND-PLAN-NODE: the path ~s is not a list of steps." path))
+  (unless (or (null plan-tree) (plan-tree-node-p plan-tree))
+    (error "FIND-PLAN-NODE: ~s is not a plan tree (see EXPAND-PLAN)." plan-tree))
   (when plan-tree
     (if (null path)
         plan-tree
