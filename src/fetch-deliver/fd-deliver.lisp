@@ -78,8 +78,10 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
                         :warning-namespace (fd-plans deliver)
                         :reset-designators (list ?target)
                         :rethrow-failure 'common-fail:object-undeliverable))))
-              (let ((?location ?robot-location))
-                (exe:perform (desig:an action (type navigating) (location ?location))))
+              (let ((?location ?robot-location)
+                    (?place (list ?object ?arm ?target)))
+                (exe:perform (desig:an action (type navigating) (location ?location)
+                                       (place ?place))))
               (cpl:with-retry-counters ((target-retries 4))
                 (cpl:with-failure-handling
                     (((or common-fail:looking-high-level-failure

@@ -52,6 +52,7 @@ location of its type in CONTEXT."
                                (and see (object-designator-or-error see :navigating d))))
                       (:grasp ,(let ((grasp (prop d :grasp)))
                                  (and grasp (object-designator-or-error grasp :navigating d))))
+                      (:place ,(prop d :place))
                       (:park-arms ,(if (eq (prop d :park-arms :unset) :unset) t
                                        (prop d :park-arms))))))))
 

@@ -37,10 +37,11 @@ with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none."
               :description (format nil "No solution of ~a is free of collisions for the robot."
                                    location))))
 
-(defun navigate (&key location (park-arms t) see grasp &allow-other-keys)
+(defun navigate (&key location (park-arms t) see grasp place &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
 (NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
-given) is visible and the object designator GRASP (when given) can be grasped, and drive there.
+given) is visible, the object designator GRASP (when given) can be grasped and PLACE (when
+given: (object arm target)) can be put down, and drive there.
 A low-level navigation failure is logged and ignored, as on a real base that plans around
 obstacles."
   (when park-arms
@@ -50,7 +51,10 @@ obstacles."
                      location :accept (lambda (pose)
                                         (and (or (null see) (object-visible-from-p see pose))
                                              (or (null grasp)
-                                                 (object-graspable-from-p grasp pose))))))))
+                                                 (object-graspable-from-p grasp pose))
+                                             (or (null place)
+                                                 (apply #'object-placeable-from-p
+                                                        (append place (list pose))))))))))
     (handler-case
         (exe:perform (desig:an action (type going) (target ?location)))
       (common-fail:navigation-low-level-failure (e)

@@ -122,3 +122,17 @@ state; the robot is put back."
      (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
      (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps) t)
        (common-fail:object-unreachable () nil)))))
+
+(defparameter *placing-base-check-samples* 5
+  "How many target samples the choice of a delivery's base pose tries from each candidate pose.")
+
+(defun object-placeable-from-p (object arm target pose)
+  "True when the robot, standing at POSE (map), puts OBJECT held in ARM down at one of the first
+*PLACING-BASE-CHECK-SAMPLES* solutions of TARGET free of collisions. Checked in the belief
+state; the robot is put back."
+  (call-restoring-robot
+   (lambda ()
+     (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
+     (let ((*placing-check-samples* *placing-base-check-samples*))
+       (handler-case (progn (check-placing-collisions object arm target) t)
+         (common-fail:object-undeliverable () nil))))))
