@@ -144,7 +144,8 @@ TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
                           (call-with-exit-guard
                            task
                            (if node (lambda () (run-in-node node thunk)) thunk)
-                           (lambda () (or leaving (task-evaporating task)))))
+                           (lambda () (or leaving (task-evaporating task)
+                                          (eq *task-in-caller-thread* task)))))
                   status :succeeded)))))
     (finish-task task status values failure)))
 
@@ -241,6 +242,11 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
+(defvar *task-in-caller-thread* nil
+  "The task RUN-TASK-HERE runs in the thread of its caller (a REPL, a program): that thread's
+stack is the caller's, so a non-local exit out of the task (leaving the debugger for the REPL's
+top level) is the caller's to make, not a foreign exit.")
+
 (defun run-task-here (name group thunk node)
   "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
 thread would: the task's bindings, its outcome in GROUP. Returns the task."
@@ -249,7 +255,8 @@ thread would: the task's bindings, its outcome in GROUP. Returns the task."
     (bt:with-lock-held ((task-group-lock group))
       (push task (task-group-tasks group)))
     (let ((*current-task* task)
-          (*task-tree-node* nil))
+          (*task-tree-node* nil)
+          (*task-in-caller-thread* task))
       (unwind-protect
            ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
            ;; debugger (ABORT) is then no foreign exit
