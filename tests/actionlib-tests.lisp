@@ -15,16 +15,26 @@
 (defun checkout-file (name)
   (namestring (merge-pathnames name (asdf:system-source-directory "cram-plans/tests/base"))))
 
+(defmacro with-setup-backtrace (&body body)
+  "Run BODY; an error in it becomes an error that shows where it came from (the setup of a
+private master and nodes depends on the machine)."
+  `(handler-bind ((error (lambda (e)
+                           (error "Setting up the gripper's server failed: ~a~%~{  ~s~%~}"
+                                  e (sb-debug:list-backtrace :count 12)))))
+     ,@body))
+
 (defun call-with-gripper-server (thunk)
   "A private master, the gripper's action server and a node of this process around THUNK (a
 node left running by an earlier test is stopped first: it talks to another master)."
-  (roslisp-utilities:shutdown-ros)
-  (cram-ros-pms::start-private-ros)
+  (with-setup-backtrace
+    (roslisp-utilities:shutdown-ros)
+    (cram-ros-pms::start-private-ros))
   (unwind-protect
        (progn
-         (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
-                                    (checkout-file "tools/ros/gripper_action_server.py"))
-         (roslisp:start-ros-node "actionlib_test" :anonymous t)
+         (with-setup-backtrace
+           (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
+                                      (checkout-file "tools/ros/gripper_action_server.py"))
+           (roslisp:start-ros-node "actionlib_test" :anonymous t))
          (funcall thunk))
     (actionlib-client:destroy-simple-action-clients)
     (ignore-errors (roslisp-utilities:shutdown-ros))
