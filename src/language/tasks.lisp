@@ -244,8 +244,9 @@ and all threads joined before this returns. Returns the decision."
 
 (defvar *task-in-caller-thread* nil
   "The task RUN-TASK-HERE runs in the thread of its caller (a REPL, a program): that thread's
-stack is the caller's, so a non-local exit out of the task (leaving the debugger for the REPL's
-top level) is the caller's to make, not a foreign exit.")
+stack is the caller's, so a non-local exit out of the task's own body (leaving the debugger for
+the REPL's top level, a THROW to the caller's CATCH) unwinds it as in Lisp; exits out of its
+child tasks' threads remain TASK-EXIT-ERRORs.")
 
 (defun run-task-here (name group thunk node)
   "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
