@@ -88,6 +88,10 @@ robot at speed 10: every motion goes over ROS (the node's counts, no projection 
 bottle ends within 3 cm of the destination in the node's world; a perception miss is recovered
 by a new look direction; a blocked navigation goal is NAVIGATION-POSE-UNREACHABLE; a lost master
 is a ROBOT-CONNECTION-ERROR within a bounded time."
+  ;; the random choices (IK restarts, costmap samples) start where a fresh image starts, so the
+  ;; run does not depend on what the suites before it drew
+  (urdf-proj:reset-ik-random-state)
+  (costmap:seed-costmaps 1)
   (cram-ros-pms::start-private-ros)
   (unwind-protect
        (progn
