@@ -8,9 +8,6 @@
   "Ground action designators of TYPE (a keyword) through BODY's groundings (PP-PLANS' dispatch)."
   `(pp-plans::def-action-grounding ,type (,designator) ,@body))
 
-(defun resolved (plan type entries)
-  (pp-plans::resolved plan type entries))
-
 (defun object-type-of (object)
   (let ((type (prop object :type)))
     (and type (keywordp type) type)))

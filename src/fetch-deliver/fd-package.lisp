@@ -5,7 +5,9 @@
 
 (defpackage :cram-fetch-deliver-plans
   (:nicknames :fd-plans)
-  (:use :cl :cram-prolog))
+  (:use :cl :cram-prolog)
+  ;; the designator helpers of the pick-and-place groundings this layer extends
+  (:import-from :cram-mobile-pick-place-plans #:prop #:resolved))
 
 (in-package :cram-fetch-deliver-plans)
 
@@ -15,11 +17,6 @@ what was expected."))
 
 (defun fd-error (control &rest arguments)
   (error 'fetch-deliver-error :format-control control :format-arguments arguments))
-
-(defun prop (designator key &optional default)
-  "The value of KEY in DESIGNATOR (DEFAULT when it has none)."
-  (multiple-value-bind (value found) (desig:desig-prop-value designator key)
-    (if found value default)))
 
 (defun log-fd (level tag control &rest arguments)
   (apply #'cpl:log-message level (list 'fd-plans tag) control arguments))
