@@ -62,13 +62,15 @@ lisp: native
 build: lisp
 	tools/cram-plans-run --build-core
 
+# The suites run in one image (4 GB of heap: the household, REPL and campaign suites together
+# hold more than SBCL's default 1 GB at their peak).
 # Inside the README test (tests/readme-tests.lisp, which runs the README's `make test` block
 # while this target's suites run it), only build.
 test: build
 	@mkdir -p "$(ROS_HOME)"
 	@if [ -n "$$CRAM_PLANS_README_TEST" ]; then \
 	  echo "make test: built; the suites are not started again inside the README test"; \
-	else $(SBCL) --load tests/run.lisp; fi
+	else sbcl --dynamic-space-size 4096 $(wordlist 2,100,$(SBCL)) --load tests/run.lisp; fi
 
 demo: build
 	@mkdir -p $(OUT)
