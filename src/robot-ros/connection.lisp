@@ -45,6 +45,7 @@ waits before ROBOT-CONNECTION-ERROR.")
   (changed (sb-thread:make-waitqueue))
   (joints (make-hash-table :test 'equal))   ; joint name → position
   (joint-time 0d0)                          ; NOW of the last /joint_states
+  (joint-messages 0)                        ; /joint_states messages received
   (tf (make-hash-table :test 'equal))       ; child frame → (parent . transform)
   (tf-time 0d0)
   (perception '())                          ; (stamp markers) newest first
@@ -68,6 +69,7 @@ waits before ROBOT-CONNECTION-ERROR.")
       (loop for n across names for p across positions
             do (setf (gethash n (connection-joints connection)) (float p 1d0)))
       (setf (connection-joint-time connection) (now))
+      (incf (connection-joint-messages connection))
       (sb-thread:condition-broadcast (connection-changed connection)))))
 
 (defun transform-from-msg (tr)

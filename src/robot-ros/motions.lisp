@@ -49,6 +49,19 @@ the first perception message stamped at or after it.")
                           (z orientation pose target_pose) (float (cl-transforms:z q) 1d0)
                           (w orientation pose target_pose) (float (cl-transforms:w q) 1d0))))
 
+(defun base-at-pose-p (goal &key (distance 1d-3) (angle 1d-3))
+  "True when the robot's latest base pose (TF) is within DISTANCE metres (in x and y) and ANGLE
+radians of GOAL (a pose in the map)."
+  (let ((pose (robot-base-pose)))
+    (and pose
+         (< (let ((a (cl-transforms:origin pose)) (b (cl-transforms:origin goal)))
+              (sqrt (+ (expt (- (cl-transforms:x a) (cl-transforms:x b)) 2)
+                       (expt (- (cl-transforms:y a) (cl-transforms:y b)) 2))))
+            distance)
+         (< (cl-transforms:angle-between-quaternions (cl-transforms:orientation pose)
+                                                     (cl-transforms:orientation goal))
+            angle))))
+
 (defun drive-to-map-pose (goal)
   "Send GOAL (a pose in the map) to move_base and wait: SUCCEEDED returns the pose reached;
 ABORTED fails with NAVIGATION-POSE-UNREACHABLE; PREEMPTED, REJECTED or no result within
@@ -57,6 +70,11 @@ ABORTED fails with NAVIGATION-POSE-UNREACHABLE; PREEMPTED, REJECTED or no result
          (id (send-goal client (move-base-goal goal))))
     (multiple-value-bind (status text)
         (wait-for-result client id :timeout *navigation-timeout* :connection *connection*)
+      (when (eq status :succeeded)
+        ;; the result may come before the TF that shows the base at the goal (another
+        ;; connection): wait for it, briefly, so that the belief does not keep a pose from
+        ;; mid-drive (at 10x speed a message late by 20 ms is 10 cm)
+        (wait-until *connection* (lambda () (base-at-pose-p goal)) :timeout 1.0))
       (sync-belief-state)
       (case status
         (:succeeded (robot-base-pose))

@@ -102,15 +102,22 @@ goal)...) there, timed with *JOINT-SPEED* from their current positions."
 until each is within *JOINT-TOLERANCE* of its goal. The failure class FAILURE is signalled (its
 description naming WHAT, the joints and the values) when they stand still away from the goal for
 *STALL-TIMEOUT* s or TIMEOUT s pass. With SETTLE, standing still anywhere ends the motion
-(grippers closing on an object). Syncs the belief state; returns the positions reached."
+(grippers closing on an object). Standing still is seen in messages: the time counts only while
+/joint_states keeps arriving (at least half of them at 50 Hz), so a robot whose messages are late
+(a loaded machine) is not taken for one that stopped. Syncs the belief state; returns the
+positions reached."
   (let* ((c *connection*)
          (joints (mapcar #'first pairs))
          (start (now))
-         (last-positions nil) (last-change start)
+         (last-positions nil) (last-change start) (messages-at-change 0)
          (reached nil))
     (when (null pairs) (return-from move-joint-group nil))
     (send-joint-command controller pairs)
-    (flet ((positions () (let ((p (robot-joint-positions c))) (mapcar (lambda (j) (gethash j p)) joints))))
+    (flet ((positions () (let ((p (robot-joint-positions c))) (mapcar (lambda (j) (gethash j p)) joints)))
+           (still-for-p (seconds)
+             ;; no change for SECONDS of wall time, seen in at least 25 messages per second
+             (and (> (- (now) last-change) seconds)
+                  (>= (- (connection-joint-messages c) messages-at-change) (ceiling (* 25 seconds))))))
       (loop
         (wait-until c (lambda () nil) :timeout 0.05)
         (let ((now (positions)))
@@ -119,22 +126,30 @@ description naming WHAT, the joints and the values) when they stand still away f
                              (loop for j in joints for v in now unless v collect j) what))
           (when (or (null last-positions)
                     (loop for a in now for b in last-positions thereis (> (abs (- a b)) 1d-4)))
-            (setf last-positions now last-change (now)))
-          (when (every (lambda (p v) (<= (joint-error (first p) (second p) v) *joint-tolerance*)) pairs now)
-            (setf reached t) (return))
-          (let ((still (- (now) last-change)))
-            (when (and settle (> (- (now) start) 0.5) (> still 0.3))
-              (return))
-            (when (or (> still *stall-timeout*) (> (- (now) start) timeout))
-              (sync-belief-state)
-              (cpl:fail failure
-                        :description
-                        (format nil "~a did not reach its goal (~:[joints stopped for ~,1f s~;~*timeout ~a s~]): ~
-                                     ~{~{~a wanted ~,4f, at ~,4f~}~^; ~}."
-                                what (> (- (now) start) timeout) still timeout
-                                (loop for (j g) in pairs for v in now collect (list j g v)))))))))
+            (setf last-positions now last-change (now)
+                  messages-at-change (connection-joint-messages c)))
+          ;; within the tolerance, the controller is let finish its trajectory (a tenth of the
+          ;; tolerance, the joints still, or half a second) so that the next motion starts from
+          ;; where this one was meant to end: a gripper opened early would let go elsewhere
+          (flet ((within-p (tolerance)
+                   (every (lambda (p v) (<= (joint-error (first p) (second p) v) tolerance)) pairs now)))
+            (when (and (not reached) (within-p *joint-tolerance*))
+              (setf reached (now)))
+            (when (and reached (or (within-p (/ *joint-tolerance* 10)) (still-for-p 0.1)
+                                   (> (- (now) reached) 0.5)))
+              (return)))
+          (when (and settle (> (- (now) start) 0.5) (still-for-p 0.3))
+            (return))
+          (when (and (not reached) (or (still-for-p *stall-timeout*) (> (- (now) start) timeout)))
+            (sync-belief-state)
+            (cpl:fail failure
+                      :description
+                      (format nil "~a did not reach its goal (~:[joints stopped for ~,1f s~*~;~*timeout ~a s~]): ~
+                                   ~{~{~a wanted ~,4f, at ~,4f~}~^; ~}."
+                              what (> (- (now) start) timeout) (- (now) last-change) timeout
+                              (loop for (j g) in pairs for v in now collect (list j g v))))))))
     (sync-belief-state)
-    (values (positions-of joints) reached)))
+    (values (positions-of joints) (and reached t))))
 
 (defun positions-of (joints)
   (let ((p (robot-joint-positions))) (mapcar (lambda (j) (list j (gethash j p))) joints)))

@@ -63,6 +63,7 @@ class SimRobot(object):
 
     def __init__(self):
         self.lock = threading.RLock()
+        self.pending = {}          # side -> (attach or release, rospy.Time of the command, deadline)
         description = rospy.get_param('robot_description')
         self.speed = float(rospy.get_param('~speed', 1.0))
         if not self.speed > 0:
@@ -250,16 +251,41 @@ class SimRobot(object):
 
     # ---- joints and grippers ---------------------------------------------------------------
 
-    def tool_pose(self, side):
-        """Pose [x y z qx qy qz qw] of SIDE's tool frame in map from TF, or None."""
+    def tool_pose(self, side, since=None):
+        """Pose [x y z qx qy qz qw] of SIDE's tool frame in map from TF, or None; with SINCE (a
+        rospy.Time), None unless TF holds the frame at SINCE or later."""
         frame = self.tool_frames.get(side)
         if not frame:
             return None
         try:
-            return transform_pose(self.tf_buffer.lookup_transform('map', frame, rospy.Time(0)))
+            t = self.tf_buffer.lookup_transform('map', frame, rospy.Time(0))
         except (tf2_ros.LookupException, tf2_ros.ConnectivityException,
                 tf2_ros.ExtrapolationException):
             return None
+        if since is not None and t.header.stamp < since:
+            return None
+        return transform_pose(t)
+
+    def settle_gripper_events(self, now):
+        """Attach and release where the gripper commands found the arm. The tool frame comes
+        from TF (robot_state_publisher), which may lag the joints: an event waits, at most a
+        second, for a tool pose stamped after its command, so that an object is not anchored or
+        let go where the arm was while it still moved."""
+        for side, (kind, stamp, deadline) in list(self.pending.items()):
+            tool = self.tool_pose(side, since=stamp)
+            if tool is None and now >= deadline:
+                tool = self.tool_pose(side)
+            if tool is None and now < deadline:
+                continue
+            del self.pending[side]
+            if kind == 'attach' and tool is not None:
+                self.world.anchor(side, tool)
+            elif kind == 'release':
+                if tool is not None:
+                    self.world.follow(side, tool)
+                for o in self.world.release(side):
+                    rospy.loginfo('sim_robot: %s released by the %s gripper', o.name, side)
+            self.objects_dirty = True
 
     def on_command(self, msg, group):
         """A JointTrajectory on <group>_controller/command."""
@@ -294,9 +320,8 @@ class SimRobot(object):
         closing = any(targets[j] < current[j] - 1e-4 for j in fingers)
         opening = any(targets[j] > current[j] + 1e-4 for j in fingers)
         if opening and not closing:
-            for o in self.world.release(side):
-                rospy.loginfo('sim_robot: %s released by the %s gripper', o.name, side)
-            self.objects_dirty = True
+            if self.world.attached_to(side):
+                self.pending[side] = ('release', rospy.Time.now(), now + 1.0)
             return targets
         held = self.world.attached_to(side)
         if closing and not held:
@@ -305,7 +330,8 @@ class SimRobot(object):
             if tool is None:
                 rospy.logwarn('sim_robot: no TF for the %s tool frame, nothing grasped', side)
             if obj:
-                self.world.attach(obj, side, tool)
+                self.world.attach(obj, side, None)
+                self.pending[side] = ('attach', rospy.Time.now(), now + 1.0)
                 rospy.loginfo('sim_robot: %s attached to the %s gripper', obj.name, side)
                 held = [obj]
         if held:
@@ -371,6 +397,7 @@ class SimRobot(object):
             positions = self.joints.positions(now)
             x, y, yaw = self.base.at(now)
             dropped = self.faults.dropped(now)
+            self.settle_gripper_events(now)
             for side in self.tool_frames:
                 if self.world.attached_to(side):
                     tool = self.tool_pose(side)

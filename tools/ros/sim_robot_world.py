@@ -314,12 +314,21 @@ class World(object):
         return best
 
     def attach(self, obj, side, tool_pose):
-        obj.attached = (side, pose_mul(pose_inverse(tool_pose), obj.pose))
+        """Attach OBJ to SIDE's tool frame at TOOL_POSE; with TOOL_POSE None the attachment is
+        pending (the object is held but does not follow yet): anchor() completes it."""
+        obj.attached = (side, None if tool_pose is None else pose_mul(pose_inverse(tool_pose), obj.pose))
+
+    def anchor(self, side, tool_pose):
+        """Complete the pending attachments of SIDE with its tool frame at TOOL_POSE."""
+        for o in self.attached_to(side):
+            if o.attached[1] is None:
+                o.attached = (side, pose_mul(pose_inverse(tool_pose), o.pose))
 
     def follow(self, side, tool_pose):
         """Move the objects attached to SIDE with its tool frame at TOOL_POSE."""
         for o in self.attached_to(side):
-            o.pose = pose_mul(tool_pose, o.attached[1])
+            if o.attached[1] is not None:
+                o.pose = pose_mul(tool_pose, o.attached[1])
 
     def release(self, side):
         released = self.attached_to(side)
