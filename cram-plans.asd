@@ -165,44 +165,44 @@ points in polygons (package CRAM-MATH, CMA)."
 (defsystem "cram-plans/cram-designators"
   :description "Designators: action, motion, location, object and human descriptions grounded through Prolog (package DESIG)."
   :depends-on ("cram-plans/cram-utilities" "cram-plans/cram-prolog" "cram-plans/cl-transforms")
-  :pathname "designators/"
+  :pathname "src/designators/"
   :serial t
-  :components ((:file "desig-package")
-               (:file "desig-protocol")
-               (:file "desig-macros")
-               (:file "desig-grounding")
-               (:file "desig-location")
-               (:file "desig-facts")))
+  :components ((:file "package")
+               (:file "protocol")
+               (:file "macros")
+               (:file "grounding")
+               (:file "location")
+               (:file "facts")))
 
 (defsystem "cram-plans/cram-robot-interfaces"
   :description "Interface predicates of robot descriptions and the current robot (package ROB-INT)."
   :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-designators")
-  :pathname "designators/"
+  :pathname "src/robot-interfaces/"
   :serial t
-  :components ((:file "robot-interfaces-package")
-               (:file "robot-interfaces")
-               (:file "robot-interfaces-facts")
-               (:file "robot-interfaces-designators")))
+  :components ((:file "package")
+               (:file "interfaces")
+               (:file "facts")
+               (:file "designators")))
 
 (defsystem "cram-plans/cram-location-costmap"
   :description "Location costmaps and their metadata predicates (package COSTMAP)."
   :depends-on ("cram-plans/cram-prolog" "cram-plans/cram-utilities" "cram-plans/cram-robot-interfaces" "cram-plans/cram-designators"
                "cram-plans/cl-transforms" "cram-plans/cram-native" "cram-plans/cram-bullet-reasoning")
-  :pathname "designators/"
+  :pathname "src/location-costmap/"
   :serial t
-  :components ((:file "costmap-package")
-               (:file "costmap-metadata")
-               (:file "costmap-grid")
-               (:file "costmap-values")
-               (:file "costmap-functions")
-               (:file "costmap-belief")
-               (:file "costmap-targets")
-               (:file "costmap-designators")
-               (:file "costmap-household-bodies")
-               (:file "costmap-household-regions")
-               (:file "costmap-household-relations")
-               (:file "costmap-household-robot")
-               (:file "costmap-heatmap")))
+  :components ((:file "package")
+               (:file "metadata")
+               (:file "grid")
+               (:file "values")
+               (:file "functions")
+               (:file "belief")
+               (:file "targets")
+               (:file "designators")
+               (:file "household-bodies")
+               (:file "household-regions")
+               (:file "household-relations")
+               (:file "household-robot")
+               (:file "heatmap")))
 
 (defsystem "cram-plans/cram-pr2-description"
   :description "The PR2 as robot-description facts keyed by :PR2 (package PR2-DESCR)."
@@ -454,8 +454,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "native-tests")
-               (:file "native-tests-2")
-               (:file "native-tests-3")
+               (:file "native-queries-tests")
+               (:file "native-float-modes-tests")
                (:file "native-fuzz-tests")
                (:file "native-ik-tests")))
 
@@ -545,7 +545,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :pathname "tests/"
   :serial t
   :components ((:file "bad-input-tests")
-               (:file "bad-input-tests-2")))
+               (:file "bad-input-projection-tests")))
 
 (defsystem "cram-plans/tests/runner"
   :depends-on ("cram-plans/tests/base" "yason" "sb-posix")

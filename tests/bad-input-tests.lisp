@@ -1,6 +1,6 @@
 ;;;; The bad-input suite: table-driven cases of what a user may type at every layer (Prolog,
 ;;;; plan language, transforms, designators here; belief state, URDF, simulated robot and
-;;;; costmaps in bad-input-tests-2.lisp). Each case states the outcome it must have:
+;;;; costmaps in bad-input-projection-tests.lisp). Each case states the outcome it must have:
 ;;;;
 ;;;;   :error    a clear error: a condition whose message contains the value as the user wrote
 ;;;;             it (MATCH), that is not a raw SBCL condition (TYPE-ERROR, CONTROL-ERROR,

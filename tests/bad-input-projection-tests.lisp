@@ -1,4 +1,4 @@
-;;;; The bad-input suite, second part: belief state (BTR), URDF, the simulated robot and its
+;;;; The bad-input suite, projection cases: belief state (BTR), URDF, the simulated robot and its
 ;;;; motions, costmaps. The table and its runner are in bad-input-tests.lisp.
 
 (in-package :cram-plans-tests.bad-input)
