@@ -88,6 +88,9 @@
                (:file "builtins")
                (:file "library")
                (:file "query")
+               (:file "rete-memory")
+               (:file "rete-alpha")
+               (:file "rete-beta")
                (:file "rete")
                (:file "documentation")))
 
@@ -439,7 +442,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "prolog-builtin-tests")
                (:file "prolog-engine-tests")
                (:file "prolog-api-tests")
-               (:file "prolog-rete-tests")))
+               (:file "prolog-rete-tests")
+               (:file "prolog-rete-network-tests")))
 
 (defsystem "cram-plans/tests/transforms"
   :depends-on ("cram-plans/tests/base" "cram-plans/cl-transforms")

@@ -40,7 +40,12 @@ Decisions on CRAM's quirks:
   code are constants, except in the binding alists a handler returns.
 - Queries given as the same (constant) list are compiled once: do not modify a goal list after
   passing it to PROLOG.
-- MEMBER, TAKE and LENGTH read lazy lists, computing their elements only as far as needed.")
+- MEMBER, TAKE and LENGTH read lazy lists, computing their elements only as far as needed.
+- RETE: asserted facts are data (a ?symbol in a fact is a constant; atoms compare with EQUAL). A
+  production's network exists while it has handlers; handlers are called once the change that
+  triggered them has propagated, so they may assert and retract facts. A Prolog pattern in a
+  production is proved when a partial match reaches it; later changes of the Prolog database do
+  not update its matches. ALPHA-NETWORK-SIZE counts facts.")
   (:export
    ;; queries and definitions
    #:prolog #:def-fact-group #:<- #:def-prolog-handler #:remove-prolog-handler

@@ -1,115 +1,50 @@
 ;;;; CRAM's RETE API: a working memory of facts, productions (conjunctions of patterns) and
-;;;; handlers called when a production starts or stops to hold. A change of the working memory
-;;;; re-matches only the productions that have a pattern the changed fact fits, and reports the
-;;;; difference between their old and new matches.
+;;;; handlers called when a production starts or stops to hold. The facts pass through a RETE
+;;;; network (rete-alpha.lisp, rete-beta.lisp): a change of the working memory costs work in
+;;;; proportion to the partial matches it makes or breaks, never a new match from scratch.
+;;;;
+;;;; A production's network exists while the production has handlers: it is built (and filled
+;;;; from the working memory) when the first handler is registered and removed with the last one.
 
 (in-package :cram-prolog)
 
-(defvar *working-memory* (make-hash-table :test 'equal)
-  "The facts RETE-ASSERT added (fact → T).")
-
-(defvar *working-memory-lock* (sb-thread:make-mutex :name "rete working memory")
-  "Serialises changes of the working memory and the calls of production handlers.")
-
-(defstruct (production (:constructor make-production (name patterns)))
-  "A production: NAME, its PATTERNS (terms whose ?variables are bound across them), the
-handlers registered for it and the matches found last (a list of (facts . bindings))."
-  name patterns (handlers '()) (matches '()) (active nil))
-
 (defvar *productions* (make-hash-table :test 'eq) "Production name → PRODUCTION.")
-
-(defun check-fact (fact function)
-  (unless (and (consp fact) (alexandria:proper-list-p fact))
-    (prolog-error "~s: the fact ~s is not a list (functor argument...)." function fact)))
-
-(defun working-memory-facts ()
-  (loop for fact being the hash-keys of *working-memory* collect fact))
 
 (defun alpha-network-size ()
   "The number of facts in the working memory."
   (hash-table-count *working-memory*))
 
 (defun clear-alpha-network ()
-  "Remove every fact from the working memory (no handler is called) and forget the matches of
-the productions."
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
-    (clrhash *working-memory*)
-    (loop for p being the hash-values of *productions* do (setf (production-matches p) '())))
+  "Remove every fact from the working memory (no handler is called) and forget the matches of the
+productions; the productions and their handlers stay."
+  (with-network-change (clear-alpha-network)
+    (let ((*silent* t))
+      (loop for wme being the hash-values of *working-memory*
+            do (network-retract wme)))
+    (clrhash *working-memory*))
   t)
 
-(defun prolog-pattern-p (pattern)
-  "True when PATTERN is proved by Prolog (its functor has clauses or a handler) rather than
-matched against the working memory."
-  (let ((functor (car pattern)))
-    (and (symbolp functor) (not (is-var functor))
-         (let ((pred (gethash functor *predicates*)))
-           (and pred (or (pred-sources pred) (pred-dynamic pred) (pred-handler pred)
-                         (pred-native pred) (pred-control pred))
-                t)))))
-
-(defun match-patterns (patterns bindings)
-  "Every way the PATTERNS match the working memory (Prolog patterns are proved) under BINDINGS:
-a list of (facts . bindings), FACTS the working-memory facts matched, in order."
-  (if (null patterns)
-      (list (cons '() bindings))
-      (let ((pattern (first patterns)))
-        (if (prolog-pattern-p pattern)
-            (loop for solution in (force-ll (prolog pattern bindings))
-                  append (loop for (facts . b) in (match-patterns (rest patterns)
-                                                                  (append solution bindings))
-                               collect (cons facts b)))
-            (loop for fact in (working-memory-facts)
-                  append (multiple-value-bind (b ok) (unify pattern fact bindings)
-                           (when ok
-                             (loop for (facts . b2) in (match-patterns (rest patterns) b)
-                                   collect (cons (cons fact facts) b2)))))))))
-
-(defun production-bindings (production bindings)
-  "The keyword arguments of a handler call: :?VAR value for each variable of PRODUCTION."
-  (loop for var in (vars-in (production-patterns production))
-        append (list (intern (symbol-name var) :keyword) (var-value var bindings))))
-
-(defun call-handlers (production operation bindings)
-  (dolist (handler (production-handlers production))
-    (apply handler operation (production-bindings production bindings))))
-
-(defun rematch-production (production)
-  "Match PRODUCTION afresh; call its handlers with :ASSERT for new matches and :RETRACT for
-vanished ones."
-  (let* ((old (production-matches production))
-         (new (match-patterns (production-patterns production) '())))
-    (setf (production-matches production) new)
-    (dolist (m old)
-      (unless (member (car m) new :key #'car :test #'equal)
-        (call-handlers production :retract (cdr m))))
-    (dolist (m new)
-      (unless (member (car m) old :key #'car :test #'equal)
-        (call-handlers production :assert (cdr m))))))
-
-(defun affected-productions (fact)
-  (loop for p being the hash-values of *productions*
-        when (and (production-active p)
-                  (some (lambda (pattern) (nth-value 1 (unify pattern fact)))
-                        (production-patterns p)))
-          collect p))
-
 (defun rete-assert (fact)
-  "Add FACT (a list) to the working memory; the productions it completes call their handlers
-with :ASSERT. Returns FACT."
+  "Add FACT (a list; a copy is kept) to the working memory; the productions it completes call
+their handlers with :ASSERT. A fact already there (EQUAL) is not added again. Returns FACT."
   (check-fact fact 'rete-assert)
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
+  (with-network-change (rete-assert)
     (unless (gethash fact *working-memory*)
-      (setf (gethash (copy-tree fact) *working-memory*) t)
-      (mapc #'rematch-production (affected-productions fact))))
+      (let* ((copy (copy-tree fact))
+             (wme (make-wme copy (incf *next-wme-serial*))))
+        (setf (gethash copy *working-memory*) wme)
+        (network-assert wme))))
   fact)
 
 (defun rete-retract (fact)
   "Remove FACT from the working memory; the productions that held through it call their handlers
-with :RETRACT. Returns FACT."
+with :RETRACT. A fact not in the working memory is ignored. Returns FACT."
   (check-fact fact 'rete-retract)
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
-    (when (remhash fact *working-memory*)
-      (mapc #'rematch-production (affected-productions fact))))
+  (with-network-change (rete-retract)
+    (let ((wme (gethash fact *working-memory*)))
+      (when wme
+        (remhash fact *working-memory*)
+        (network-retract wme))))
   fact)
 
 (defmacro with-facts-asserted ((&rest facts) &body body)
@@ -121,21 +56,45 @@ retracted when BODY is left."
             (progn (mapc #'rete-assert ,list) ,@body)
          (mapc #'rete-retract ,list)))))
 
+;;; One-shot queries
+
+(defun prove-conjunction (patterns bindings)
+  "Every extension of BINDINGS under which the conjunction PATTERNS holds: fact patterns are
+matched against the facts of the smallest alpha memory holding their matches (else against the
+whole working memory), Prolog patterns are proved."
+  (if (null patterns)
+      (list bindings)
+      (let ((pattern (first patterns)))
+        (if (prolog-pattern-p pattern)
+            (loop for solution in (force-ll (prolog pattern bindings))
+                  append (prove-conjunction (rest patterns) (append solution bindings)))
+            (let ((query (substitute-vars pattern bindings)))
+              (loop for wme in (candidate-wmes query)
+                    append (multiple-value-bind (new ok)
+                               (progn (incf *prove-attempts*)
+                                      (match-term query (wme-fact wme) '()))
+                             (when ok
+                               (prove-conjunction (rest patterns) (append new bindings))))))))))
+
 (defun rete-prove (patterns &optional bindings)
   "The solutions (a list of binding alists for the variables of PATTERNS) of the conjunction
-PATTERNS against the working memory (patterns of Prolog predicates are proved by Prolog)."
+PATTERNS against the working memory, extending BINDINGS (patterns of Prolog predicates are
+proved by Prolog). Solutions come in the order the facts were asserted, without duplicates."
   (unless (and (listp patterns) (every #'consp patterns))
     (prolog-error "RETE-PROVE: ~s is not a list of patterns." patterns))
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
+  (dolist (pattern patterns) (check-pattern pattern 'rete-prove))
+  (with-rete-lock ()
     (remove-duplicates
-     (loop for (nil . b) in (match-patterns patterns bindings)
+     (loop for b in (prove-conjunction patterns bindings)
            collect (filter-bindings patterns b bindings))
      :test #'equal :from-end t)))
 
 (def-prolog-handler rete-holds (bindings ?fact)
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
-    (loop for fact in (working-memory-facts)
-          for (b ok) = (multiple-value-list (unify ?fact fact bindings))
+  (with-rete-lock ()
+    (check-pattern ?fact 'rete-holds)
+    (loop for wme in (candidate-wmes ?fact)
+          for (b ok) = (multiple-value-list
+                        (progn (incf *prove-attempts*) (match-term ?fact (wme-fact wme) bindings)))
           when ok collect b)))
 
 (defvar *object-ids* (make-hash-table :test 'eq :weakness :key :synchronized t)
@@ -146,20 +105,41 @@ PATTERNS against the working memory (patterns of Prolog predicates are proved by
   "A number that stays the same for OBJECT (compared with EQ) while it lives, for facts about
 objects."
   (or (gethash object *object-ids*)
-      (sb-thread:with-recursive-lock (*working-memory-lock*)
+      (with-rete-lock ()
         (or (gethash object *object-ids*)
             (setf (gethash object *object-ids*) (incf *next-object-id*))))))
 
 ;;; Productions
 
-(defun register-production (name patterns)
-  "Define (or redefine) the production NAME as the conjunction of PATTERNS."
+(defun check-production (name patterns function)
+  "Signal a PROLOG-ERROR naming FUNCTION unless NAME is a symbol and PATTERNS a non-empty list
+of patterns."
   (unless (and name (symbolp name))
-    (prolog-error "REGISTER-PRODUCTION: the name ~s is not a symbol." name))
-  (unless (and (consp patterns) (every (lambda (p) (and (consp p) (alexandria:proper-list-p p)))
-                                       patterns))
-    (prolog-error "REGISTER-PRODUCTION ~s: ~s is not a non-empty list of patterns." name patterns))
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
+    (prolog-error "~s: the name ~s is not a symbol." function name))
+  (unless (and (consp patterns) (alexandria:proper-list-p patterns)
+               (every (lambda (p) (and (consp p) (alexandria:proper-list-p p))) patterns))
+    (prolog-error "~s ~s: ~s is not a non-empty list of patterns." function name patterns))
+  (dolist (pattern patterns) (check-pattern pattern function name)))
+
+(defun drop-production-network (production)
+  "Remove PRODUCTION's nodes (and the nodes and memories only it used); no handler is called."
+  (let ((node (production-node production)))
+    (when node
+      (setf (production-node production) nil)
+      (remove-beta-node node))))
+
+(defun forget-production (production)
+  "Drop PRODUCTION's handlers and network."
+  (setf (production-handlers production) '())
+  (drop-production-network production))
+
+(defun register-production (name patterns)
+  "Define (or redefine) the production NAME as the conjunction of PATTERNS. A redefined
+production loses its handlers and its matches (no handler is called)."
+  (check-production name patterns 'register-production)
+  (with-network-change (register-production)
+    (let ((old (gethash name *productions*)))
+      (when old (forget-production old)))
     (setf (gethash name *productions*) (make-production name patterns)))
   name)
 
@@ -168,52 +148,83 @@ objects."
   `(register-production ',name ',patterns))
 
 (defun find-production (name function)
+  "The production NAME, or a PROLOG-ERROR naming FUNCTION."
   (or (gethash name *productions*)
       (prolog-error "~s: there is no production named ~s." function name)))
 
 (defun remove-production (name)
-  "Forget the production NAME. True when it existed."
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
-    (and (remhash name *productions*) t)))
+  "Forget the production NAME with its handlers and matches (no handler is called). True when
+it existed."
+  (with-network-change (remove-production)
+    (let ((production (gethash name *productions*)))
+      (when production
+        (remhash name *productions*)
+        (forget-production production)
+        t))))
 
 (defun clear-productions ()
-  "Forget every production."
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
+  "Forget every production (no handler is called)."
+  (with-network-change (clear-productions)
+    (loop for production being the hash-values of *productions*
+          do (forget-production production))
     (clrhash *productions*))
   t)
 
+(defun call-with-productions (specs function)
+  "Call FUNCTION with the productions SPECS ((name pattern...) ...) defined, shadowing those of
+the same names; afterwards they are gone (their networks too) and the shadowed ones are back."
+  (let ((*productions* (with-rete-lock () (alexandria:copy-hash-table *productions*)))
+        (made '()))
+    (unwind-protect
+         (progn
+           (loop for (name . patterns) in specs
+                 do (check-production name patterns 'with-productions)
+                    (let ((production (make-production name patterns)))
+                      (push production made)
+                      (with-rete-lock () (setf (gethash name *productions*) production))))
+           (funcall function))
+      (when made
+        (with-network-change (with-productions)
+          (mapc #'forget-production made))))))
+
 (defmacro with-productions ((&rest productions) &body body)
-  "Evaluate BODY with the PRODUCTIONS ((name pattern...) ...) defined (shadowing productions of
+  "Evaluate BODY with PRODUCTIONS ((name pattern...) ...) defined (shadowing productions of
 those names); afterwards the productions are as before."
-  `(let ((*productions* (alexandria:copy-hash-table *productions*)))
-     ,@(loop for (name . patterns) in productions
-             collect `(register-production ',name ',patterns))
-     ,@body))
+  `(call-with-productions ',productions (lambda () ,@body)))
 
 (defun register-production-handler (name handler)
-  "Call HANDLER, a function (operation &key ?var... &allow-other-keys), with :ASSERT whenever the
-production NAME starts to hold for some values of its variables and with :RETRACT when it stops
-to; the matches that hold when it is registered are reported with :ASSERT at once."
-  (unless (functionp handler)
+  "Call HANDLER, a function (or the name of one) of (operation &key ?var... &allow-other-keys),
+with :ASSERT whenever the production NAME starts to hold for some values of its variables and
+with :RETRACT when it stops to; the matches that hold when it is registered are reported with
+:ASSERT at once. Handlers run after the change that triggered them is complete, holding the
+network's lock; they may assert and retract facts."
+  (unless (or (functionp handler) (and handler (symbolp handler) (fboundp handler)))
     (prolog-error "REGISTER-PRODUCTION-HANDLER: ~s is not a function." handler))
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
-    (let ((production (find-production name 'register-production-handler)))
-      (pushnew handler (production-handlers production))
-      (if (production-active production)
-          (dolist (m (production-matches production))
-            (apply handler :assert (production-bindings production (cdr m))))
-          (progn (setf (production-active production) t
-                       (production-matches production) '())
-                 (rematch-production production)))
+  (with-rete-lock ()
+    (let ((production nil) (report '()))
+      (with-network-change (register-production-handler)
+        (setf production (find-production name 'register-production-handler))
+        (cond ((member handler (production-handlers production)))
+              ((production-node production)
+               (push handler (production-handlers production))
+               (setf report (mapcar #'token-bindings
+                                    (rset-items (beta-node-memory
+                                                 (production-node production))))))
+              (t
+               (setf (production-node production) (build-production-network production))
+               (push handler (production-handlers production)))))
+      (dolist (bindings report)
+        (apply handler :assert (production-handler-arguments production bindings)))
       name)))
 
 (defun remove-production-handler (name handler)
-  "Stop calling HANDLER for the production NAME."
-  (sb-thread:with-recursive-lock (*working-memory-lock*)
+  "Stop calling HANDLER for the production NAME; without handlers, the production's network is
+removed."
+  (with-network-change (remove-production-handler)
     (let ((production (find-production name 'remove-production-handler)))
       (setf (production-handlers production) (remove handler (production-handlers production)))
       (unless (production-handlers production)
-        (setf (production-active production) nil (production-matches production) '()))
+        (drop-production-network production))
       name)))
 
 (defmacro with-production-handlers ((&rest handlers) &body body)
@@ -229,5 +240,31 @@ REGISTER-PRODUCTION-HANDLER); they are removed when BODY is left."
          ,@(loop for h in handlers for n in names
                  collect `(remove-production-handler ',(first h) ,n))))))
 
+(defun rete-statistics ()
+  "A plist describing the network: :FACTS, :ALPHA-MEMORIES, :ALPHA-NODES (of the discrimination
+tree), :ALPHA-ITEMS (facts held by alpha memories), :INDEX-BUCKETS (of the alpha indexes),
+:BETA-NODES, :TOKENS, :LEFT-INDEX-BUCKETS, :JOIN-ATTEMPTS and :PROVE-ATTEMPTS (counters)."
+  (with-rete-lock ()
+    (let ((beta-nodes 0) (tokens 0) (left-buckets 0))
+      (map-beta-nodes (lambda (node)
+                        (incf beta-nodes)
+                        (incf tokens (rset-count (beta-node-memory node)))
+                        (when (and (join-node-p node) (join-node-left-index node))
+                          (incf left-buckets (hash-table-count (join-node-left-index node))))))
+      (list :facts (hash-table-count *working-memory*)
+            :alpha-memories (hash-table-count *alpha-memories*)
+            :alpha-nodes (alpha-tree-size)
+            :alpha-items (loop for m being the hash-values of *alpha-memories*
+                               sum (rset-count (alpha-memory-items m)))
+            :index-buckets (loop for m being the hash-values of *alpha-memories*
+                                 sum (loop for index in (alpha-memory-indexes m)
+                                           sum (hash-table-count (alpha-index-buckets index))))
+            :beta-nodes beta-nodes
+            :tokens tokens
+            :left-index-buckets left-buckets
+            :join-attempts *join-attempts*
+            :prove-attempts *prove-attempts*))))
+
 (setf (documentation 'rete-holds 'function)
-      "Prolog predicate (rete-holds ?fact): ?fact unifies with a fact of the working memory.")
+      "Prolog predicate (rete-holds ?fact): ?fact matches a fact of the working memory, one solution
+per fact, in the order of assertion.")
