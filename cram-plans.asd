@@ -502,11 +502,13 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "projection-clock-tests")))
 
 (defsystem "cram-plans/tests/btr"
-  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description")
+  :depends-on ("cram-plans/tests/base" "cram-plans/cram-bullet-reasoning" "cram-plans/cram-pr2-description"
+               "sb-posix")
   :pathname "tests/"
   :serial t
   :components ((:file "btr-tests")
                (:file "btr-api-tests")
+               (:file "btr-compound-tests")
                (:file "btr-errors-tests")))
 
 (defsystem "cram-plans/tests/scripts"

@@ -41,14 +41,19 @@ changed)."
           (setf (gethash string *urdf-foreign-strings*) (cons (length string) pointer))
           pointer))))
 
-(defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes)
+(defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes single-hull)
   "Add the articulated object described by URDF-STRING at base POSE: one kinematic body per
-link with collision geometry, every joint at 0.  EXACT-MESHES: collision meshes as exact
-triangle meshes (for static environments) instead of convex hulls.  Returns its handle."
+link with collision geometry, every joint at 0.  Collision meshes become one convex hull per
+sub-mesh; EXACT-MESHES: exact triangle meshes instead (for static environments); SINGLE-HULL:
+one convex hull over all vertices of each mesh.  The two exclude each other.  Returns its
+handle."
+  (when (and exact-meshes single-hull)
+    (arg-error 'add-urdf ":exact-meshes ~s and :single-hull ~s exclude each other"
+               exact-meshes single-hull))
   (with-pose-pointer (p pose 'add-urdf)
     (ccall "cn_robot_add_urdf" world
            (urdf-foreign-string (string-arg urdf-string 'add-urdf "URDF")) p
-           (if exact-meshes 1 0))))
+           (cond (exact-meshes 1) (single-hull 2) (t 0)))))
 
 (defun %name-out (fn world robot index)
   (cffi:with-foreign-object (out :pointer)

@@ -35,6 +35,8 @@
 (defcn "cn_body_add_cone" :int (w :int) (pose :pointer) (r :double) (h :double) (mass :double))
 (defcn "cn_body_add_mesh" :int (w :int) (pose :pointer) (path :string)
   (sx :double) (sy :double) (sz :double) (mass :double))
+(defcn "cn_body_add_mesh_flags" :int (w :int) (pose :pointer) (path :string)
+  (sx :double) (sy :double) (sz :double) (mass :double) (flags :int))
 (defcn "cn_body_add_convex_hull" :int (w :int) (pose :pointer) (pts :pointer) (n :int)
   (mass :double))
 (defcn "cn_body_get_velocity" :int (w :int) (b :int) (out :pointer))
@@ -249,16 +251,19 @@ each one's group intersects the other's mask."
     (ccall "cn_body_add_cone" world p (real-arg radius 'add-cone "radius")
            (real-arg height 'add-cone "height") (real-arg mass 'add-cone "mass"))))
 
-(defun add-mesh (world pose path &key (mass 0) (scale 1))
+(defun add-mesh (world pose path &key (mass 0) (scale 1) single-hull)
   "Add a mesh body from PATH (STL, OBJ or DAE; package:// and file:// URIs work) at POSE.
-SCALE is a number or (sx sy sz).  Movable bodies get one convex hull per sub-mesh, static
-ones (MASS 0) the exact triangle mesh.  Shapes are cached by path and scale."
+SCALE is a number or (sx sy sz).  Movable bodies get one convex hull per sub-mesh of the file
+(its meshes as assimp reads them: OBJ objects and groups, DAE geometries), static ones (MASS 0)
+the exact triangle mesh.  SINGLE-HULL true: one convex hull over every vertex of every
+sub-mesh instead, movable or static.  Shapes are cached by path, scale and kind of shape."
   (let ((s (if (realp scale) (make-array 3 :element-type 'double-float
                                            :initial-element (coerce scale 'double-float))
                (to-dvec scale 3 'add-mesh "scale"))))
     (with-pose-pointer (p pose 'add-mesh)
-      (ccall "cn_body_add_mesh" world p (path-arg path 'add-mesh "mesh path")
-             (aref s 0) (aref s 1) (aref s 2) (real-arg mass 'add-mesh "mass")))))
+      (ccall "cn_body_add_mesh_flags" world p (path-arg path 'add-mesh "mesh path")
+             (aref s 0) (aref s 1) (aref s 2) (real-arg mass 'add-mesh "mass")
+             (if single-hull 1 0)))))
 
 (defun add-convex-hull (world pose points &key (mass 0))
   "Add the convex hull of POINTS (a list of (x y z) or a flat DVEC) at POSE."

@@ -1,5 +1,5 @@
-;;;; Tests of cram-native: the caller's floating point modes, the unmasked teleport path and the
-;;;; bounding boxes brought up to date at the next query.
+;;;; Tests of cram-native: the caller's floating point modes, the unmasked teleport path, the
+;;;; bounding boxes brought up to date at the next query, and meshes as one hull or one per part.
 
 (in-package :cram-native-tests)
 (in-suite native)
@@ -142,3 +142,47 @@ single steps put it, and a box balanced past its edge still falls over."
     (let ((tall (add-box w '(0.11 0 0.7 0 0 0 1) '(0.04 0.04 0.4) :mass 1)))
       (simulate w 3 0.01d0)
       (is (< (aref (object-pose w tall) 2) 0.5d0) "the box did not fall: ~a" (object-pose w tall)))))
+
+(defun write-two-cubes-obj (path)
+  "Write to PATH an OBJ file of two 0.2 m cubes as two objects, 0.2 m apart along x (the gap
+from x -0.1 to 0.1), bottoms at z 0. Returns PATH."
+  (with-open-file (s path :direction :output :if-exists :supersede)
+    (loop for x0 in '(-0.3 0.1) for part from 0
+          do (format s "o cube~d~%" part)
+             (dotimes (i 8)
+               (format s "v ~f ~f ~f~%" (+ x0 (* 0.2 (ldb (byte 1 0) i)))
+                       (+ -0.1 (* 0.2 (ldb (byte 1 1) i))) (* 0.2 (ldb (byte 1 2) i))))
+             (loop for (a b c d) in '((1 3 4 2) (5 6 8 7) (1 2 6 5) (3 7 8 4) (1 5 7 3) (2 4 8 6))
+                   do (format s "f ~{~d~^ ~}~%" (mapcar (lambda (k) (+ k (* 8 part))) (list a b c d))))))
+  path)
+
+(defun probe-in-gap-touches-p (w object)
+  "Does a movable 0.1 m cube put into the middle of the gap of the two-cube mesh touch OBJECT?"
+  (let ((probe (add-box w '(0 0 0.1 0 0 0 1) '(0.1 0.1 0.1) :mass 1)))
+    (prog1 (and (find object (object-contacts w probe) :key #'third) t)
+      (remove-object w probe))))
+
+(test mesh-as-one-hull-or-one-hull-per-part
+  "ADD-MESH gives one convex hull per part of a two-part mesh (its gap stays free), with
+:SINGLE-HULL one hull around both parts (the gap is filled), movable or static; ADD-URDF's
+:SINGLE-HULL does the same to link meshes, and cannot go with :EXACT-MESHES."
+  (let ((path (write-two-cubes-obj (concatenate 'string (temp-dir) "two-cubes.obj"))))
+    (with-world (w)
+      (dolist (mass '(1 0))
+        (let ((parts (add-mesh w '(0 0 0 0 0 0 1) path :mass mass))
+              (one (add-mesh w '(2 0 0 0 0 0 1) path :mass mass :single-hull t)))
+          (is (not (probe-in-gap-touches-p w parts)) "mass ~a: the gap of the parts is filled" mass)
+          (set-object-pose w one '(0 0 0 0 0 0 1))
+          (remove-object w parts)
+          (is (probe-in-gap-touches-p w one) "mass ~a: the single hull leaves the gap free" mass)
+          (is (eq :mesh (body-shape w one)))
+          (remove-object w one)))
+      (let* ((urdf (format nil "<robot name='two'><link name='a'><collision><geometry><mesh filename='~a'/></geometry></collision></link></robot>" path))
+             (parts (add-urdf w urdf)))
+        (is (not (probe-in-gap-touches-p w parts)))
+        (remove-object w parts)
+        (let ((one (add-urdf w urdf :single-hull t)))
+          (is (probe-in-gap-touches-p w one))
+          (remove-object w one))
+        (signals-naming (":exact-meshes T" ":single-hull :YES" "exclude each other")
+          (add-urdf w urdf :exact-meshes t :single-hull :yes))))))

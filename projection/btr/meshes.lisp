@@ -45,7 +45,15 @@
         (btr-fail "mesh file ~a (from ~s) does not exist" path uri))))
 
 (defvar *mesh-files* '()
-  "Alist of mesh keywords: (keyword uri-or-path compound-p). ADD-OBJECTS-TO-MESH-LIST fills it.")
+  "Alist of mesh keywords: (keyword uri-or-path flag), the flag being CRAM's flip-winding-order
+(kept, not used). ADD-OBJECTS-TO-MESH-LIST fills it.")
+
+(defparameter *all-meshes-as-compound* t
+  "The default of the :COMPOUND key of :MESH objects (ADD-OBJECT), as in CRAM. True: the
+collision shape of a movable mesh object is one convex hull per sub-mesh of its file (the
+meshes of an OBJ or DAE file; an STL file has one), children of a compound shape, so the
+hollows between the parts stay free; a static one (mass 0) is the exact triangle mesh. NIL: one
+convex hull over every vertex of the file, movable or static (hollows filled).")
 
 (defun file-name->keyword (name)
   "fork_plastic → :FORK-PLASTIC."
@@ -83,14 +91,16 @@ entries are replaced. Returns the keywords."
         ((pathnamep mesh) (resolve-uri (namestring mesh)))
         (t (btr-fail ":mesh ~s, expected a mesh keyword, a URI string or a pathname" mesh))))
 
-(define-object-kind :mesh (world pose (mass 0) mesh (scale 1) (compound t) disable-face-culling)
-  (declare (ignore compound disable-face-culling))
+(define-object-kind :mesh (world pose (mass 0) mesh (scale 1) (compound *all-meshes-as-compound*)
+                               disable-face-culling)
+  (declare (ignore disable-face-culling))
   (unless mesh (btr-fail ":mesh object needs :mesh (a keyword of *MESH-FILES* or a file)"))
   (unless (or (and (realp scale) (> scale 0))
               (and (listp scale) (= 3 (length scale)) (every (lambda (s) (and (realp s) (> s 0))) scale)))
     (btr-fail ":mesh scale ~s, expected a positive real or (sx sy sz)" scale))
   (values (native:add-mesh (world-handle world) pose (namestring (mesh-path mesh))
-                           :mass (mass-arg mass ":mesh") :scale scale)
+                           :mass (mass-arg mass ":mesh") :scale scale
+                           :single-hull (not compound))
           'item (if (keywordp mesh) (list mesh) '(:mesh))))
 
 (defun project-resources-directory ()

@@ -226,7 +226,9 @@ group and mask, color, types) are rejected by ADD-OBJECT with an error naming th
   (:documentation "Add an object of TYPE (:static-plane :box :colored-box :sphere :cylinder :cone
 :mesh :urdf :point-cloud ...) called NAME at POSE to WORLD and return it. KEYS is a list of
 keywords and values; unknown keys are an error. :TYPES is a list of item types (symbols, or
-strings, which become keywords)."))
+strings, which become keywords). :COMPOUND of :mesh objects (default
+*ALL-MESHES-AS-COMPOUND*) and of :urdf objects (default NIL) chooses between one convex hull per
+sub-mesh of a mesh file (true) and one hull over the whole mesh (NIL)."))
 
 (defmethod add-object (world type name pose &rest keys)
   (declare (ignore type name pose keys))

@@ -25,8 +25,8 @@
    ;; objects
    #:item #:robot-object #:rigid-body #:rigid-bodies #:name #:pose #:object-pose
    #:item-type #:item-types #:object-type #:aabb #:bounding-box #:object-color
-   #:collision-group-bits #:*mesh-files* #:add-objects-to-mesh-list #:register-ros-package
-   #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
+   #:collision-group-bits #:*mesh-files* #:*all-meshes-as-compound* #:add-objects-to-mesh-list
+   #:register-ros-package #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
    ;; the costmap visualization
    #:add-costmap-function-object #:add-costmap-sample-object #:add-vis-axis-object
    #:costmap-vis-object #:clear-costmap-vis-object

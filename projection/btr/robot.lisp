@@ -160,8 +160,10 @@ table name → value. All joints are set at once, then links and attached object
     (loop for j across joints for i from 0 do (setf (gethash j (km-joint-index model)) i))
     model))
 
+;;; COMPOUND (default NIL, as CRAM's robot objects): true = each collision mesh of a link is one
+;;; convex hull per sub-mesh, NIL = one convex hull over all its vertices. A static environment
+;;; (collision group :static-filter) gets its meshes as exact triangle meshes either way.
 (define-object-kind :urdf (world pose urdf compound collision-group)
-  (declare (ignore compound))
   (let* ((model (typecase urdf
                   (cl-urdf:robot urdf)
                   (string (cl-urdf:parse-urdf urdf))
@@ -173,7 +175,9 @@ table name → value. All joints are set at once, then links and attached object
     (unless (eq natural-root (cl-urdf:root-link model))
       (setf model (cl-urdf:parse-urdf (cl-urdf:rerooted-source model))))
     (let ((handle (native:add-urdf (world-handle world) (cl-urdf:source model) :pose pose
-                                  :exact-meshes (eq collision-group :static-filter))))
+                                  :exact-meshes (eq collision-group :static-filter)
+                                  :single-hull (and (not compound)
+                                                    (not (eq collision-group :static-filter))))))
       (values handle 'robot-object nil
               (list :model (build-kinematic-model world handle model))))))
 

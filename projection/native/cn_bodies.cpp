@@ -62,17 +62,28 @@ int cn_body_add_cone(int wh, const double *pose, double r, double h, double mass
   });
 }
 
-int cn_body_add_mesh(int wh, const double *pose, const char *path, double sx, double sy,
-                     double sz, double mass) {
+int cn_body_add_mesh_flags(int wh, const double *pose, const char *path, double sx, double sy,
+                           double sz, double mass, int flags) {
   return guard([&] {
     world(wh);
     read_pose(pose);
+    if (flags & ~CN_MESH_SINGLE_HULL)
+      fail(CN_E_ARG, "unknown mesh flags %d (known: CN_MESH_SINGLE_HULL = %d)", flags,
+           CN_MESH_SINGLE_HULL);
     std::string p = resolve_path(check_str(path, "mesh path"), "");
     btVector3 s(check_positive(sx, "mesh scale x"), check_positive(sy, "mesh scale y"),
                 check_positive(sz, "mesh scale z"));
     check_nonneg(mass, "mass");
-    return add_body(wh, pose, load_mesh(p, s, mass == 0), mass, "mesh");
+    MeshMode mode = (flags & CN_MESH_SINGLE_HULL) ? MeshMode::OneHull
+                    : mass == 0                   ? MeshMode::Exact
+                                                  : MeshMode::Hulls;
+    return add_body(wh, pose, load_mesh(p, s, mode), mass, "mesh");
   });
+}
+
+int cn_body_add_mesh(int wh, const double *pose, const char *path, double sx, double sy,
+                     double sz, double mass) {
+  return cn_body_add_mesh_flags(wh, pose, path, sx, sy, sz, mass, 0);
 }
 
 int cn_body_add_convex_hull(int wh, const double *pose, const double *pts, int n, double mass) {

@@ -279,7 +279,7 @@ extern "C" {
 
 const char *cn_last_error(void) { return t_error.c_str(); }
 int cn_last_error_code(void) { return t_code; }
-int cn_version(void) { return 10000; }
+int cn_version(void) { return 10100; }
 
 int cn_add_package_path(const char *name, const char *dir) {
   return guard([&] {

@@ -2,6 +2,7 @@
 #include "cn_internal.hpp"
 
 #include <BulletCollision/CollisionShapes/btShapeHull.h>
+#include <LinearMath/btConvexHullComputer.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -189,6 +190,20 @@ static btCollisionShape *hull_of(const std::vector<btVector3> &pts) {
   return h;
 }
 
+// The exact convex hull of PTS: only its corner points are kept, none dropped. (HULL_OF keeps at
+// most the 42-odd support points of fixed directions when given more than 64 points, which
+// leaves out corners of large flat faces: a plate's underside would come out tilted.)
+static btCollisionShape *exact_hull_of(const std::vector<btVector3> &pts) {
+  btConvexHullComputer hc;
+  hc.compute(&pts[0].x(), (int)sizeof(btVector3), (int)pts.size(), 0, 0);
+  if (hc.vertices.size() < 4) return hull_of(pts);  // flat or degenerate: keep every point
+  auto *h = new btConvexHullShape();
+  for (int i = 0; i < hc.vertices.size(); ++i) h->addPoint(hc.vertices[i], false);
+  h->setMargin(shape_margin());
+  h->recalcLocalAabb();
+  return h;
+}
+
 ShapeP make_hull(const double *p, int n) {
   std::vector<btVector3> pts;
   auto rm = std::make_shared<RenderMesh>();
@@ -225,6 +240,9 @@ static std::map<std::string, RenderMeshP> g_render_cache;
 static MeshData read_mesh(const std::string &path, const btVector3 &scale) {
   Assimp::Importer imp;
   imp.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // every mesh of the file stays a sub-mesh of its own (pre-transforming would join the meshes
+  // that share a material)
+  imp.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
   const aiScene *sc = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                              aiProcess_PreTransformVertices |
                                              aiProcess_SortByPType);
@@ -275,8 +293,10 @@ RenderMeshP load_render_mesh(const std::string &path, const btVector3 &scale) {
   return rm;
 }
 
-ShapeP load_mesh(const std::string &path, const btVector3 &scale, bool exact) {
-  std::string key = cache_key(path, scale, exact ? "exact" : "hulls");
+ShapeP load_mesh(const std::string &path, const btVector3 &scale, MeshMode mode) {
+  std::string key = cache_key(path, scale, mode == MeshMode::Exact  ? "exact"
+                                           : mode == MeshMode::Hulls ? "hulls"
+                                                                     : "one-hull");
   {
     std::lock_guard<std::mutex> lock(g_mesh_mutex);
     auto it = g_shape_cache.find(key);
@@ -286,12 +306,16 @@ ShapeP load_mesh(const std::string &path, const btVector3 &scale, bool exact) {
   auto s = std::make_shared<Shape>();
   s->kind = 5;
   s->dims[0] = scale.x(); s->dims[1] = scale.y(); s->dims[2] = scale.z();
-  if (exact) {
+  if (mode == MeshMode::Exact) {
     s->trimesh = new btTriangleMesh(true, false);
     for (auto &p : d.parts)
       for (size_t i = 0; i + 2 < p.size(); i += 3) s->trimesh->addTriangle(p[i], p[i + 1], p[i + 2]);
     s->shape = new btBvhTriangleMeshShape(s->trimesh, true);
     s->shape->setMargin(shape_margin());
+  } else if (mode == MeshMode::OneHull) {
+    std::vector<btVector3> all;
+    for (auto &p : d.parts) all.insert(all.end(), p.begin(), p.end());
+    s->shape = exact_hull_of(all);
   } else {
     auto *comp = new btCompoundShape(false, (int)d.parts.size());
     s->shape = comp;

@@ -168,7 +168,10 @@ ShapeP make_sphere(double r);
 ShapeP make_cylinder(double r, double h);
 ShapeP make_cone(double r, double h);
 ShapeP make_hull(const double *pts, int n);
-ShapeP load_mesh(const std::string &path, const btVector3 &scale, bool exact);  // cached
+// How a mesh file becomes a collision shape: the exact triangle mesh (static bodies only), one
+// convex hull per sub-mesh (children of a compound), or one convex hull over every vertex.
+enum class MeshMode { Exact, Hulls, OneHull };
+ShapeP load_mesh(const std::string &path, const btVector3 &scale, MeshMode mode);  // cached
 RenderMeshP load_render_mesh(const std::string &path, const btVector3 &scale);   // cached
 double shape_margin();
 std::string resolve_path(const std::string &uri, const std::string &base_dir);
@@ -197,7 +200,7 @@ struct Model {
   std::unordered_map<std::string, int> link_index, joint_index;
 };
 using ModelP = std::shared_ptr<const Model>;
-ModelP parse_urdf(const std::string &xml, bool exact_meshes);
+ModelP parse_urdf(const std::string &xml, MeshMode meshes);
 
 // ---- objects and worlds --------------------------------------------------------------------
 struct World;

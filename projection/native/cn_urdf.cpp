@@ -47,7 +47,7 @@ static void check_pose_finite(const urdf::Pose &p, const std::string &where) {
 
 // collision shape and draw items of one geometry element
 static ShapeP geometry_shape(const urdf::GeometrySharedPtr &g, const std::string &where,
-                             bool exact) {
+                             MeshMode meshes) {
   if (!g) fail(CN_E_PARSE, "%s has no geometry", where.c_str());
   switch (g->type) {
     case urdf::Geometry::SPHERE: {
@@ -79,7 +79,7 @@ static ShapeP geometry_shape(const urdf::GeometrySharedPtr &g, const std::string
         fail(e.code, "%s: %s", where.c_str(), e.msg.c_str());
       }
       try {
-        return load_mesh(path, s, exact);
+        return load_mesh(path, s, meshes);
       } catch (const Error &e) {
         fail(e.code, "%s: %s", where.c_str(), e.msg.c_str());
       }
@@ -100,7 +100,7 @@ static void append_draw(std::vector<RenderItem> &out, const Shape &s, const btTr
   }
 }
 
-ModelP parse_urdf(const std::string &xml, bool exact) {
+ModelP parse_urdf(const std::string &xml, MeshMode meshes) {
   t_urdf_log.clear();
   urdf::ModelInterfaceSharedPtr m;
   try {
@@ -201,7 +201,7 @@ ModelP parse_urdf(const std::string &xml, bool exact) {
     for (auto &c : l->collision_array) {
       std::string where = fmt("collision %d of link '%s'", k++, l->name.c_str());
       check_pose_finite(c->origin, where);
-      parts.emplace_back(geometry_shape(c->geometry, where, exact), to_bt(c->origin));
+      parts.emplace_back(geometry_shape(c->geometry, where, meshes), to_bt(c->origin));
     }
     if (parts.size() == 1 && parts[0].second == btTransform::getIdentity()) {
       lm.collision = parts[0].first;
@@ -243,7 +243,7 @@ ModelP parse_urdf(const std::string &xml, bool exact) {
           if (has) { for (int i2 = 0; i2 < 4; ++i2) it.rgba[i2] = rgba[i2]; it.has_color = true; }
           vis.push_back(it);
         } else {
-          s = geometry_shape(v->geometry, "visual of link '" + l->name + "'", false);
+          s = geometry_shape(v->geometry, "visual of link '" + l->name + "'", MeshMode::Hulls);
           append_draw(vis, *s, to_bt(v->origin), has ? rgba : nullptr);
         }
       } catch (const Error &) {
@@ -347,14 +347,15 @@ static Object &robot_joint(World &w, int r, int joint) {
 
 using namespace cn;
 
-// Parsed models by URDF text: a plan that rebuilds its world (init-projection) does not parse
-// the same kitchen and robot again. Models are immutable and shared; the cache is bounded.
-static ModelP cached_model(const std::string &xml, bool exact) {
-  static std::unordered_map<std::string, ModelP> cache[2];
-  auto &c = cache[exact ? 1 : 0];
+// Parsed models by URDF text and mesh mode: a plan that rebuilds its world (init-projection)
+// does not parse the same kitchen and robot again. Models are immutable and shared; each
+// cache is bounded.
+static ModelP cached_model(const std::string &xml, MeshMode meshes) {
+  static std::unordered_map<std::string, ModelP> cache[3];
+  auto &c = cache[static_cast<int>(meshes)];
   auto it = c.find(xml);
   if (it != c.end()) return it->second;
-  ModelP m = parse_urdf(xml, exact);
+  ModelP m = parse_urdf(xml, meshes);
   if (c.size() >= 16) c.clear();
   c.emplace(xml, m);
   return m;
@@ -367,8 +368,15 @@ int cn_robot_add_urdf(int wh, const char *xml, const double *pose, int flags) {
     World &w = world(wh);
     std::string x = check_str(xml, "URDF string");
     btTransform base = read_pose(pose, "base pose");
-    if (flags & ~CN_URDF_EXACT_MESHES) fail(CN_E_ARG, "unknown URDF flags %d", flags);
-    ModelP m = cached_model(x, flags & CN_URDF_EXACT_MESHES);
+    if (flags & ~(CN_URDF_EXACT_MESHES | CN_URDF_SINGLE_HULL))
+      fail(CN_E_ARG, "unknown URDF flags %d (known: CN_URDF_EXACT_MESHES = %d, CN_URDF_SINGLE_HULL = %d)",
+           flags, CN_URDF_EXACT_MESHES, CN_URDF_SINGLE_HULL);
+    if ((flags & CN_URDF_EXACT_MESHES) && (flags & CN_URDF_SINGLE_HULL))
+      fail(CN_E_ARG, "URDF flags %d: CN_URDF_EXACT_MESHES and CN_URDF_SINGLE_HULL exclude each other",
+           flags);
+    ModelP m = cached_model(x, (flags & CN_URDF_EXACT_MESHES)  ? MeshMode::Exact
+                               : (flags & CN_URDF_SINGLE_HULL) ? MeshMode::OneHull
+                                                               : MeshMode::Hulls);
     std::unique_ptr<Object> o(new Object);
     o->kind = CN_ARTICULATED;
     o->model = m;

@@ -112,10 +112,19 @@ int cn_body_add_cylinder(int world, const double *pose7, double radius, double h
                          double mass);             /* axis = local z                      */
 int cn_body_add_cone(int world, const double *pose7, double radius, double height,
                      double mass);                 /* axis = local z, apex at +height/2    */
-/* STL / OBJ / DAE through assimp.  Movable bodies: one convex hull per sub-mesh in a compound;
- * static bodies: the exact triangle mesh.  Loaded shapes are cached by path + scale. */
+/* STL / OBJ / DAE through assimp.  Sub-meshes are the meshes of the file as assimp reads
+ * them (an OBJ object or group, a DAE geometry; an STL file has one), never joined.  Movable
+ * bodies: one convex hull per sub-mesh, children of a compound shape (a sub-mesh of more than
+ * 64 triangle corners: the hull of its support points in 42-odd fixed directions); static
+ * bodies (mass 0): the exact triangle mesh.  flags: CN_MESH_SINGLE_HULL = the exact convex
+ * hull of every vertex of every sub-mesh instead, movable or static (concavities between the
+ * parts are filled).  cn_body_add_mesh = flags 0.  Loaded shapes are cached by path + scale +
+ * kind of shape. */
+#define CN_MESH_SINGLE_HULL 1
 int cn_body_add_mesh(int world, const double *pose7, const char *path,
                      double sx, double sy, double sz, double mass);
+int cn_body_add_mesh_flags(int world, const double *pose7, const char *path,
+                           double sx, double sy, double sz, double mass, int flags);
 int cn_body_add_convex_hull(int world, const double *pose7, const double *points3n, int n,
                             double mass);
 int cn_body_get_velocity(int world, int body, double *out6);        /* linear, angular     */
@@ -127,9 +136,12 @@ int cn_body_shape(int world, int body, double *out_dims4);          /* -> kind  
 
 /* ---- articulated objects from URDF ---------------------------------------------------------- */
 /* One kinematic rigid body per link with collision geometry.  flags: CN_URDF_EXACT_MESHES =
- * collision meshes as exact triangle meshes (for static environments), else one convex hull
- * per sub-mesh.  Every joint starts at 0. */
+ * collision meshes as exact triangle meshes (for static environments); CN_URDF_SINGLE_HULL =
+ * each collision mesh as the exact convex hull of all its vertices; neither: one convex hull per
+ * sub-mesh of each collision mesh (as cn_body_add_mesh).  The two flags exclude each other.
+ * Every joint starts at 0. */
 #define CN_URDF_EXACT_MESHES 1
+#define CN_URDF_SINGLE_HULL  2
 int cn_robot_add_urdf(int world, const char *urdf_xml, const double *base_pose7, int flags);
 int cn_robot_name(int world, int robot, const char **out_name);
 int cn_robot_num_links(int world, int robot);

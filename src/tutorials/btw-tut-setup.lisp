@@ -111,7 +111,10 @@ halfway up; keep a copy of it as the template."
     (btr:add-object world :urdf kitchen-name '((0 0 0) (0 0 0 1)) :urdf kitchen
                     :collision-group :static-filter
                     :collision-mask '(:default-filter :character-filter))
-    (let ((pr2 (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
+    ;; :compound t: a robot URDF with meshes (robot_description under ROS) collides with one
+    ;; convex hull per sub-mesh of each link mesh, as it always has here
+    (let ((pr2 (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot
+                               :compound t)))
       (btr:set-robot-state-from-joints (robot-park-joint-states robot-name) pr2)
       (multiple-value-bind (torso-link torso-joint)
           (let ((b (car (prolog `(rob-int:robot-torso-link-joint ,robot-name ?l ?j)))))

@@ -63,7 +63,9 @@ URDF re-rooted at *PEPPER-ROOT-LINK* so that it stands on the floor."
       (btr:add-object world :urdf :kitchen '((0 0 0) (0 0 0 1)) :urdf kitchen
                       :collision-group :static-filter
                       :collision-mask '(:default-filter :character-filter) :compound t)
-      (let ((pepper (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot)))
+      ;; :compound t: link meshes (a URDF from the robot parameter) as one hull per sub-mesh
+      (let ((pepper (btr:add-object world :urdf robot-name '((0 0 0) (0 0 0 1)) :urdf robot
+                                    :compound t)))
         ;; the kinematic model the projection plans with is the re-rooted one
         (setf rob-int:*robot-urdf* (btr:urdf pepper)))
       (btr:debug-window world))
