@@ -64,13 +64,24 @@ a query predicate, whose failure is the documented answer, keeps warning and fai
 Returns FUNCTION-NAMES."
   (dolist (name function-names function-names)
     (check-type name symbol)
-    (setf (gethash name *lisp-error-propagating-functions*) t)))
+    (setf (gethash name *lisp-error-propagating-functions*) t)
+    (setf **propagating-names**
+          (coerce (loop for n being the hash-keys of *lisp-error-propagating-functions* collect n)
+                  'simple-vector))))
+
+(sb-ext:defglobal **propagating-names** #()
+  "The names of *LISP-ERROR-PROPAGATING-FUNCTIONS* as a vector, read without a lock.")
 
 (defun lisp-errors-propagate-p (function)
-  "True when errors from FUNCTION (a function object or a symbol) propagate out of queries."
-  (let ((name (cond ((symbolp function) function)
-                    ((functionp function) (ignore-errors (sb-kernel:%fun-name function))))))
-    (and name (symbolp name) (gethash name *lisp-error-propagating-functions*))))
+  "True when errors from FUNCTION (a function object or a symbol) propagate out of queries. A
+function object counts when a registered name holds it now (looked up without taking a lock)."
+  (cond ((symbolp function) (values (gethash function *lisp-error-propagating-functions*)))
+        ((functionp function)
+         (let ((names **propagating-names**))
+           (declare (type simple-vector names))
+           (loop for name across names
+                   thereis (and (fboundp name) (eq (symbol-function name) function)))))
+        (t nil)))
 
 (defun call-lisp (function args)
   "Apply FUNCTION to ARGS. Returns (values result t), or, when it signals an error,

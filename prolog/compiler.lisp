@@ -103,6 +103,23 @@ list spines iteratively."
 (defun simple-atom-p (p)
   (and (atom p) (not (source-var-p p))))
 
+;;; Closures are made per combination of element kinds, so that the kind dispatch of
+;;; MATCH-ELEMENT and BUILD-ELEMENT is folded away when the closure is compiled.
+
+(defmacro with-constant-kinds ((&rest specs) &body body)
+  "BODY once per combination of the kinds in SPECS, ((var kinds) ...), with each VAR a constant
+in it: the closures BODY makes dispatch on nothing at run time. When KINDS ends in :RUNTIME, the
+kinds not listed keep VAR a variable; otherwise the last kind stands for all others."
+  (if (null specs)
+      `(progn ,@body)
+      (destructuring-bind ((var kinds) &rest more) specs
+        (let ((inner `(with-constant-kinds ,more ,@body)))
+          `(case ,var
+             ,@(loop for (k . rest) on kinds
+                     collect (cond ((eq k :runtime) `(otherwise ,inner))
+                                   (rest `(,k (symbol-macrolet ((,var ,k)) ,inner)))
+                                   (t `(otherwise (symbol-macrolet ((,var ,k)) ,inner))))))))))
+
 ;;; Pattern elements classified for inline matching: KIND 0 store a first occurrence, 1 unify
 ;;; with a variable's value, 2 anonymous, 3 EQ-comparable atom, 5 other atom, 4 a matcher closure.
 
@@ -164,10 +181,11 @@ constant, 2 anonymous, 3 a builder closure."
         (t (multiple-value-bind (kcar dcar) (classify-build-element (car p))
              (multiple-value-bind (kcdr dcdr) (classify-build-element (cdr p))
                (declare (type fixnum kcar kcdr))
-               (lambda (frame)
-                 (declare (type simple-vector frame))
-                 (let ((a (build-element kcar dcar frame)))
-                   (cons a (build-element kcdr dcdr frame)))))))))
+               (with-constant-kinds ((kcar (0 1 2 3)) (kcdr (0 1 2 3)))
+                 (lambda (frame)
+                   (declare (type simple-vector frame) (optimize (safety 0)))
+                   (let ((a (build-element kcar dcar frame)))
+                     (cons a (build-element kcdr dcdr frame))))))))))
 
 (defun compile-match (p)
   "A function (M FRAME TERM) unifying the run-time TERM with source pattern P."
@@ -193,14 +211,15 @@ constant, 2 anonymous, 3 a builder closure."
              (multiple-value-bind (kcar dcar) (classify-match-element (car p))
                (multiple-value-bind (kcdr dcdr) (classify-match-element (cdr p))
                  (declare (type fixnum kcar kcdr))
-                 (lambda (m frame term)
-                   (declare (type simple-vector frame))
-                   (let ((x (deref term)))
-                     (cond ((consp x)
-                            (and (match-element kcar dcar m frame (car x))
-                                 (match-element kcdr dcdr m frame (cdr x))))
-                           ((pvar-p x) (bind-var m x (funcall builder frame)))
-                           (t nil))))))))))
+                 (with-constant-kinds ((kcar (0 1 2 3 5 4)) (kcdr (0 1 2 3 5 4)))
+                   (lambda (m frame term)
+                     (declare (type simple-vector frame) (optimize (safety 0)))
+                     (let ((x (deref term)))
+                       (cond ((consp x)
+                              (and (match-element kcar dcar m frame (car x))
+                                   (match-element kcdr dcdr m frame (cdr x))))
+                             ((pvar-p x) (bind-var m x (funcall builder frame)))
+                             (t nil)))))))))))
 
 ;;; Argument lists: the common case of a proper list of arguments gets one loop instead of a
 ;;; chain of closures, with variables and atoms handled inline.
@@ -218,8 +237,11 @@ constant, 2 anonymous, 3 a builder closure."
            ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i)))
            ,@(loop for s in ss for i from 0 collect `(,s (svref ,suffixes ,i))))
        (declare (type fixnum ,@ks) (type function ,@ss))
+       (with-constant-kinds ,(if (<= n 3)
+                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
+                                 '())
        (lambda (m frame args)
-         (declare (type simple-vector frame))
+         (declare (type simple-vector frame) (optimize (safety 0)))
          (let ((a args))
            (block match
              ,@(loop for k in ks for d in ds for s in ss
@@ -230,7 +252,7 @@ constant, 2 anonymous, 3 a builder closure."
                                 (return-from match nil))
                      collect `(setf a (cdr a)))
              (let ((a (deref a)))
-               (or (null a) (and (pvar-p a) (bind-var m a nil))))))))))
+               (or (null a) (and (pvar-p a) (bind-var m a nil)))))))))))
 
 (defun compile-args-match (patterns)
   "Like COMPILE-MATCH for a whole argument list PATTERNS."
@@ -256,7 +278,7 @@ constant, 2 anonymous, 3 a builder closure."
                                 collect `(,n (unrolled-args-matcher ,n kinds data suffixes)))
                         (t
                          (lambda (m frame args)
-                           (declare (type simple-vector frame))
+                           (declare (type simple-vector frame) (optimize (safety 0)))
                            (let ((a args))
                              (dotimes (i k (let ((a (deref a)))
                                              (or (null a) (and (pvar-p a) (bind-var m a nil)))))
@@ -294,11 +316,14 @@ LAMBDA (M FRAME CONT BARRIER) built around BODY."
     `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
            ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
        (declare (type fixnum ,@ks))
-       (lambda (m ,frame cont barrier)
-         (declare (type simple-vector ,frame) (ignorable barrier))
-         (let ((,args-var (list ,@(loop for k in ks for d in ds
-                                         collect `(build-element ,k ,d ,frame)))))
-           ,@body)))))
+       (with-constant-kinds ,(if (<= n 3)
+                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
+                                 '())
+         (lambda (m ,frame cont barrier)
+           (declare (type simple-vector ,frame) (ignorable barrier) (optimize (safety 0)))
+           (let ((,args-var (list ,@(loop for k in ks for d in ds
+                                           collect `(build-element ,k ,d ,frame)))))
+             ,@body))))))
 
 (defun compile-args-build (patterns)
   "Like COMPILE-BUILD for a whole argument list PATTERNS, all of whose variables have values."
@@ -308,7 +333,7 @@ LAMBDA (M FRAME CONT BARRIER) built around BODY."
         (let ((k (length kinds)))
           (declare (type (simple-array fixnum (*)) kinds) (type simple-vector data))
           (lambda (frame)
-            (declare (type simple-vector frame))
+            (declare (type simple-vector frame) (optimize (safety 0)))
             (let ((result '()))
               (loop for i of-type fixnum from (1- k) downto 0
                     do (push (build-element (aref kinds i) (svref data i) frame) result))
@@ -357,6 +382,7 @@ goal function reads the frame only to build the call's arguments, before calling
                  (rest (compile-body (cdr goals))))
              (declare (type function first rest))
              (lambda (m frame cont barrier)
+               (declare (optimize (safety 0)))
                (funcall first m frame
                         (lambda () (funcall rest m frame cont barrier))
                         barrier))))))
@@ -462,7 +488,7 @@ clause with variables is matched in M's scratch frame."
   "Try CLAUSES in turn under the choice point at INDEX (the newest), which holds the call's
 arguments and continuation: a clause whose head does not match is skipped at once; the choice
 point is dropped before the last clause."
-  (declare (type machine m) (type fixnum index))
+  (declare (type machine m) (type fixnum index) (optimize (safety 0)))
   (let ((args (cp-data m index 1))
         (cont (cp-data m index 2)))
     (loop
@@ -551,6 +577,7 @@ and BUCKETS are parallel lists, the keys distinct under EQUAL."
         (cons-clauses (remove 1 clauses :key #'clause-kind)))
     (if (every (lambda (c) (= 0 (clause-kind c))) clauses)
         (lambda (m args cont)
+          (declare (optimize (safety 0)))
           (try-clauses m clauses args cont))
         ;; bucket per atom key: the clauses with that key or a variable first argument
         (let ((table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
@@ -568,6 +595,7 @@ and BUCKETS are parallel lists, the keys distinct under EQUAL."
                                         var-clauses)))
             (declare (type function lookup))
             (lambda (m args cont)
+              (declare (optimize (safety 0)))
               (let* ((a (first-arg-of args))
                      (selected (cond ((eq a +unbound+) clauses)
                                      ((consp a) cons-clauses)
