@@ -284,6 +284,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
   :components ((:file "package")
                (:file "robot")
                (:file "tf")
+               (:file "contacts")
                (:file "sweep")
                (:file "low-level-base")
                (:file "ik")

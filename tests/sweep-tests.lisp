@@ -228,6 +228,43 @@ condition or :OK."
       (handler-case (progn (urdf-proj:move-joints nil *right-out*) (fail "no error"))
         (error (e) (is (search "NO-SUCH-OBJECT" (princ-to-string e))))))))
 
+(test one-notion-of-intended-contacts-for-both-checks
+  "The contacts a plan declares are left out of the collision check at a key pose and of the
+sweep check on the way, whichever way they are declared: *SWEEP-ALLOWED-CONTACTS* or the
+pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
+  (with-open-world ()
+    ;; a box the stretched-out right forearm rests in
+    (set-right-arm *right-out*)
+    (add-box 'crate (point-on-link "r_forearm_link" 0.2) '(0.1 0.1 0.1))
+    (is (robot-touches 'crate) "the forearm in the crate is a collision")
+    (urdf-proj:with-allowed-sweep-contacts ('("r_forearm_link" crate))
+      (is (not (robot-touches 'crate)) "an allowed (link object) pair is no collision either"))
+    (urdf-proj:with-allowed-sweep-contacts ('("l_forearm_link" crate))
+      (is (robot-touches 'crate) "allowing another link leaves the collision"))
+    (let ((urdf-proj:*grasped-objects* '(crate)))
+      (is (robot-touches 'crate) "the forearm is no hand: grasping the crate does not excuse it")
+      (is (find '("r_gripper_palm_link" crate)
+                (urdf-proj::intended-contacts (robot)) :test #'equal)
+          "a grasped object is an intended contact of each hand link")))
+  (with-open-world ()
+    ;; the board the forearm sweeps through, declared as the object the hands close in on:
+    ;; the forearm's sweep is still reported, the hand links' are not
+    (add-board)
+    (setf urdf-proj:*sweep-check* :warn)
+    (let ((plain (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))))
+      (set-right-arm *right-park*)
+      (let ((grasping (let ((urdf-proj:*grasped-objects* '(board)))
+                        (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))))
+            (hands (urdf-proj::all-hand-links (robot))))
+        (is (find "r_forearm_link" grasping :key #'urdf-proj:sweep-moving-link :test #'equal))
+        (is (some (lambda (sw) (member (urdf-proj:sweep-moving-link sw) hands :test #'equal)) plain)
+            "without the grasp, hand links sweep the board: ~s"
+            (mapcar #'urdf-proj:sweep-moving-link plain))
+        (is (notany (lambda (sw) (member (urdf-proj:sweep-moving-link sw) hands :test #'equal))
+                    grasping)
+            "hand links sweeping the grasped object are reported")
+        (is (<= (length grasping) (length plain)))))))
+
 (test carried-object-through-the-board
   (with-open-world ()
     (set-right-arm (mix *right-park* *right-out* 0.5))

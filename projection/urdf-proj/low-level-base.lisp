@@ -5,36 +5,15 @@
 
 ;;; ---- collisions -----------------------------------------------------------------------------
 
-(defvar *grasped-objects* '()
-  "The names of the objects the robot's hands are closing in on (set by the picking-up plan
-around its grasping step): contacts of the hand links with them are the grasp, not collisions.")
-
-(defvar *placed-objects* '()
-  "The names of the held objects being put down (set by the placing plan around its putting
-step): their contacts with the surface they are put on are the placing, not collisions.")
-
-(defvar *grasp-container-links* '()
-  "The environment links the hands may touch while closing in on *GRASPED-OBJECTS*: the
-container the object lies in (its board, walls and bottom).")
-
-(defun grasp-contact-p (robot link other other-link)
-  "True when LINK of ROBOT is a hand link touching an object being grasped, or OTHER-LINK of
-the environment OTHER that holds it (*GRASP-CONTAINER-LINKS*)."
-  (and *grasped-objects* link
-       (or (member (btr:name other) *grasped-objects*)
-           (and other-link (eq other (btr:get-environment-object))
-                (member other-link *grasp-container-links* :test #'string=)))
-       (loop for arm in (ignore-errors (robot-arms))
-             thereis (member link (hand-links arm robot) :test #'string=))))
-
 (defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
                               ignore-links)
   "The names of the objects the robot collides with: contacts of its links (except the links
 in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
 with anything but the robot and each other. Contacts of the robot with the floor (static
-planes), of its hands with the objects being grasped (*GRASPED-OBJECTS*) and of the objects
-being put down (*PLACED-OBJECTS*) do not count."
+planes) and the contacts the motion is meant to make (INTENDED-CONTACTS: the hands with the
+objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
+         (intended (intended-contacts robot))
          (hits '()))
     (loop for (a la b lb) in (btr::contact-records world robot)
           for other = (if (eq a robot) b a)
@@ -43,14 +22,16 @@ being put down (*PLACED-OBJECTS*) do not count."
           unless (or (member (btr:name other) attached)
                      (eq (btr:object-kind other) :static-plane)
                      (and link (member link ignore-links :test #'string=))
-                     (grasp-contact-p robot link other other-link))
+                     (intended-contact-p intended robot link other other-link))
             do (pushnew (btr:name other) hits))
     (dolist (name attached)
       (let ((o (btr:object world name)))
-        (when (and o (not (member name *placed-objects*)))
-          (loop for (a nil b nil) in (btr::contact-records world o)
+        (when o
+          (loop for (a la b lb) in (btr::contact-records world o)
                 for other = (if (eq a o) b a)
-                unless (or (eq other robot) (member (btr:name other) attached))
+                for other-link = (if (eq a o) lb la)
+                unless (or (eq other robot) (member (btr:name other) attached)
+                           (intended-contact-p intended o nil other other-link))
                   do (pushnew (btr:name other) hits)))))
     (nreverse hits)))
 

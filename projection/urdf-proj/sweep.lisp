@@ -3,7 +3,7 @@
 ;;;; reported (*SWEEP-CHECK* :WARN), or makes the motion fail with the robot left where it
 ;;;; was (:FAIL). Contacts a motion is meant to make are not reported: the ones it starts
 ;;;; from, a hand arriving at an item, a carried object arriving at a surface, and the pairs
-;;;; of *SWEEP-ALLOWED-CONTACTS*.
+;;;; the plan declares (INTENDED-CONTACTS, contacts.lisp).
 
 (in-package :cram-urdf-projection)
 
@@ -18,19 +18,6 @@ link or carried object, what it hits and where on the way; :FAIL makes an arm, t
 or tool-frame motion whose path hits something signal MANIPULATION-POSE-UNREACHABLE with the
 robot left where it was (MOVE-TCP first tries its other base and torso candidates). Base
 drives only warn: a real base plans its own path around obstacles.")
-
-(defvar *sweep-allowed-contacts* '()
-  "Contacts motions are meant to make, left out of the sweep checks: a list of (MOVING HIT).
-MOVING is a link name of the robot (a string), the name of an object carried by the robot (a
-symbol), or T for any; HIT is an object name (a symbol), (object-name link-name), or T for
-anything. Bind it (WITH-ALLOWED-SWEEP-CONTACTS) around motions that touch on purpose, e.g. a
-hand pulling a drawer handle: ((\"r_gripper_palm_link\" (:iai-kitchen \"drawer_handle\"))).")
-
-(defmacro with-allowed-sweep-contacts ((&rest entries) &body body)
-  "Run BODY with the (MOVING HIT) ENTRIES (evaluated, see *SWEEP-ALLOWED-CONTACTS*) added to
-the contacts motions are meant to make."
-  `(let ((*sweep-allowed-contacts* (append (list ,@entries) *sweep-allowed-contacts*)))
-     ,@body))
 
 (defvar *sweep-hooks* '()
   "Functions called with each SWEEP a motion's check reports (the viewer's recorder, campaign
@@ -94,8 +81,9 @@ it hits, and where on the way."
     o))
 
 (defun allowed-contact-records (world robot)
-  "The ignore records (moving-object moving-link hit-object hit-link) of *SWEEP-ALLOWED-CONTACTS*."
-  (loop for entry in *sweep-allowed-contacts*
+  "The ignore records (moving-object moving-link hit-object hit-link) of the contacts the motion
+is meant to make (INTENDED-CONTACTS: *SWEEP-ALLOWED-CONTACTS*, the grasped and placed objects)."
+  (loop for entry in (intended-contacts robot)
         collect (progn
                   (unless (and (consp entry) (= (length entry) 2))
                     (projection-error "*SWEEP-ALLOWED-CONTACTS* entry ~s: expected (moving hit)." entry))
@@ -119,10 +107,6 @@ it hits, and where on the way."
                               (list (btr:object-handle o) (btr:link-index o (second hit)))))
                            (t (projection-error "*SWEEP-ALLOWED-CONTACTS* entry ~s: hit ~s, expected an ~
                                                  object name, (object-name link-name) or T." entry hit))))))))
-
-(defun all-hand-links (robot)
-  (loop for arm in (ignore-errors (robot-arms))
-        append (ignore-errors (hand-links arm robot))))
 
 (defun arrival-contact-records (world robot)
   "Contacts the motion arrives at on purpose, as ignore records: the robot's hand links

@@ -42,14 +42,16 @@ turned towards it."
 
 (defun shelf-view-pose-p (base-pose shelf-pose)
   "True when BASE-POSE stands in front of the open side of the shelf at SHELF-POSE, within
-*FRONT-VIEW-ANGLE* of its front direction and at least *VIEWING-DISTANCE* away."
+*FRONT-VIEW-ANGLE* of its front direction and at least *VIEWING-DISTANCE* away (less a
+millimetre)."
   (let* ((b (cl-transforms:origin base-pose))
          (p (cl-transforms:origin shelf-pose))
          (dx (- (cl-transforms:x b) (cl-transforms:x p)))
          (dy (- (cl-transforms:y b) (cl-transforms:y p)))
          (distance (sqrt (+ (* dx dx) (* dy dy))))
          (front (shelf-front-direction shelf-pose)))
-    (and (>= distance *viewing-distance*)
+    ;; a millimetre of slack: FACING-POSE stands at *VIEWING-DISTANCE*, up to rounding
+    (and (>= distance (- *viewing-distance* 1d-3))
          (>= (/ (+ (* dx (cl-transforms:x front)) (* dy (cl-transforms:y front))) distance)
              (cos *front-view-angle*)))))
 
