@@ -26,6 +26,7 @@
      desig::generated-candidates desig::validate-location costmap::costmap-samples)
     ("inverse kinematics" urdf-proj::solve-ik)
     ("collision checks" urdf-proj::robot-collisions urdf-proj::perform-collision-check)
+    ("sweep checks between key poses" urdf-proj:robot-sweeps)
     ("visibility (rendering)" btr:visibility-fraction)
     ("TF updates and lookups" urdf-proj:update-tf-from-belief-state
      cl-transforms-stamped:lookup-transform cl-transforms-stamped:transform-pose-stamped)
