@@ -46,7 +46,7 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
   "Deliver the held OBJECT to TARGET (a location designator) with ARM (NIL: the arm holding
 it), standing at ROBOT-LOCATION. Retries: a new sample of the target (4) as placing fails, a
 new base pose (15) on navigation collisions, undeliverable or manipulation failures, a new
-target (4, outermost). Returns the object designator; DELIVERING-FAILED when all are used up."
+target (4, outermost) also when no base pose for the target can be found (a designator error). Returns the object designator; DELIVERING-FAILED when all are used up."
   (let ((?object object)
         (?target (reset-or-nil target))
         (?robot-location (reset-or-nil robot-location))
@@ -58,14 +58,19 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
                                           (object-text ?object) e))))
       (cpl:with-retry-counters ((outer-target-retries 4))
         (cpl:with-failure-handling
-            ((common-fail:object-undeliverable (e)
+            (((or common-fail:object-undeliverable desig:designator-error) (e)
+               ;; CRAM's outer target level: a target sample no base pose reaches (the robot
+               ;; location cannot be resolved for it) is given up for the next sample
                (common-fail:retry-with-loc-designator-solutions
                    ?target outer-target-retries
                    (:error-object-or-string
                     (format nil "Undeliverable. Trying another target location.~%~a" e)
                     :warning-namespace (fd-plans deliver)
                     :reset-designators (remove nil (list ?robot-location))
-                    :rethrow-failure 'common-fail:delivering-failed))))
+                    :rethrow-failure 'common-fail:delivering-failed)
+                 ;; the reset robot location, relative to the new target sample
+                 (setf ?robot-location (and ?robot-location
+                                            (desig:current-desig ?robot-location))))))
           (cpl:with-retry-counters ((relocation-retries 15))
             (cpl:with-failure-handling
                 (((or common-fail:navigation-goal-in-collision
