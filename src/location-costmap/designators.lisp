@@ -136,7 +136,9 @@ turned so that the shoulder of the ARM (when given) faces it."
 (defun on-costmap (designator surface)
   "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a
 margin (half the size of the FOR object, when given), away from the items already there; the
-height is the surface top, plus the FOR object's height of its origin above its bottom."
+height is the surface top, plus the FOR object's height of its origin above its bottom. Poses
+for a FOR object come in four orientations, quarter turns about the vertical (the first
+unturned), so that an object held by its side can be put down from where the robot stands."
   (let* ((for (desig:desig-prop-value designator :for))
          (for-object (and for (typep for 'desig:object-designator)
                           (object-designator-world-object for))))
@@ -167,7 +169,9 @@ height is the surface top, plus the FOR object's height of its origin above its 
                  0d0 1d0))
            'on-free-space 5))
         (register-height-generator costmap (make-constant-height-function (+ top lift)))
-        (register-orientation-generator costmap (make-identity-orientation-generator))
+        (register-orientation-generator costmap (if for-object
+                                                    (make-quarter-turns-orientation-generator)
+                                                    (make-identity-orientation-generator)))
         costmap))))
 
 ;;; ---- the Prolog interface ------------------------------------------------------------------------

@@ -58,9 +58,11 @@ reference object is more than acos(T) off the relation's axis are excluded.")
 
 (defun closest-edge (support x y)
   "The edge (:FRONT :BACK :LEFT :RIGHT) of the SUPPORT body nearest the map point (X Y),
-distances to the longer edges counted shorter by the ratio of the sides."
+distances to the longer edges counted shorter by the ratio of the sides. As in CRAM, the sides
+are the extents of the support's box in the map, compared with the point in the support's
+frame: on the dining table, turned a quarter, a person sits at its front (map -y) edge."
   (multiple-value-bind (lx ly) (body-local-point support x y)
-    (multiple-value-bind (hx hy) (body-local-extent support)
+    (multiple-value-bind (hx hy) (body-map-half-extent support)
       (let ((ratio-x (if (> hx hy) (/ hx (max hy 1d-6)) 1d0))
             (ratio-y (if (> hy hx) (/ hy (max hx 1d-6)) 1d0)))
         (if (< (* ratio-x (- hx (abs lx))) (* ratio-y (- hy (abs ly))))
@@ -130,7 +132,8 @@ angle off it, 0 where that cosine is below THRESHOLD or on the other side."
 
 (defun relations-costmap (designator)
   "Every relation of DESIGNATOR to other objects in one costmap; without ON, IN or ABOVE also
-the support's box (shrunk for the FOR object) and its top as the height."
+the support's box (shrunk for the FOR object), its top as the height and, for a FOR object,
+quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION-GENERATOR)."
   (let ((costmap (make-location-costmap))
         (threshold (relation-threshold designator)))
     (multiple-value-bind (for-half for-lift for-object) (for-object-geometry designator)
@@ -160,7 +163,9 @@ the support's box (shrunk for the FOR object) and its top as the height."
                                     'supporting-object 9)
             (register-height-generator costmap (make-constant-height-function
                                                 (+ (cl-transforms:z (body-hi support)) for-lift)))
-            (register-orientation-generator costmap (make-identity-orientation-generator))))
+            (register-orientation-generator costmap (if for-object
+                                                        (make-quarter-turns-orientation-generator)
+                                                        (make-identity-orientation-generator)))))
         costmap))))
 
 (defun has-relation-p (designator)

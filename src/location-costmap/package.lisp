@@ -25,6 +25,7 @@
    #:make-constant-height-function #:make-matrix-cost-function
    #:make-axis-boundary-cost-function #:make-angle-to-point-generator
    #:make-orientation-generator #:make-identity-orientation-generator
+   #:make-quarter-turns-orientation-generator
    ;; occupancy grids
    #:occupancy-grid #:make-occupancy-grid
    #:invalid-probability-distribution
