@@ -133,6 +133,13 @@ turned so that the shoulder of the ARM (when given) faces it."
                      (list (list (cl-transforms:x lo) (cl-transforms:y lo)
                                  (cl-transforms:x hi) (cl-transforms:y hi)))))))
 
+(defun items-free-space-function (items margin)
+  "A cost function: 0 within MARGIN metres of the rectangles ITEMS ((x0 y0 x1 y1) ...), else 1."
+  (lambda (x y)
+    (if (loop for (a b c d) in items
+              thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
+        0d0 1d0)))
+
 (defun on-costmap (designator surface)
   "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a
 margin (half the size of the FOR object, when given), away from the items already there; the
@@ -161,13 +168,8 @@ unturned), so that an object held by its side can be put down from where the rob
                                                               (max cx (- x1 margin)) (max cy (- y1 margin)))
                                 'on-surface 0)
         (when items
-          (register-cost-function
-           costmap
-           (lambda (x y)
-             (if (loop for (a b c d) in items
-                       thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
-                 0d0 1d0))
-           'on-free-space 5))
+          (register-cost-function costmap (items-free-space-function items margin)
+                                  'on-free-space 5))
         (register-height-generator costmap (make-constant-height-function (+ top lift)))
         (register-orientation-generator costmap (if for-object
                                                     (make-quarter-turns-orientation-generator)

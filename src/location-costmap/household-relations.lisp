@@ -131,7 +131,8 @@ angle off it, 0 where that cosine is below THRESHOLD or on the other side."
     (if found (check-real value "(threshold ...)" designator :min 0 :max 1) *default-relation-threshold*)))
 
 (defun relations-costmap (designator)
-  "Every relation of DESIGNATOR to other objects in one costmap; without ON, IN or ABOVE also
+  "Every relation of DESIGNATOR to other objects in one costmap, clear (by half the FOR
+object's size) of the items on the reference object's support; without ON, IN or ABOVE also
 the support's box (shrunk for the FOR object), its top as the height and, for a FOR object,
 quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION-GENERATOR)."
   (let ((costmap (make-location-costmap))
@@ -156,6 +157,17 @@ quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION
                                                                         (cl-transforms:y point))
                                                       point support threshold)
                             key 7))))))
+        ;; a FOR object is put down clear of the items already on the support by half its
+        ;; size, as on a surface (ON-COSTMAP), not into them
+        (when for-object
+          (let* ((support (relation-support-body designator))
+                 (lo (body-lo support)) (hi (body-hi support))
+                 (items (supporting-items (cl-transforms:x lo) (cl-transforms:y lo)
+                                          (cl-transforms:x hi) (cl-transforms:y hi)
+                                          (cl-transforms:z hi) for-object)))
+            (when items
+              (register-cost-function costmap (items-free-space-function items for-half)
+                                      'relation-free-space 5))))
         (unless (some (lambda (key) (desig:desig-prop-value designator key)) '(:on :in :above))
           (let ((support (relation-support-body designator)))
             (register-cost-function costmap (shrunk-box-function (body-lo support) (body-hi support)
