@@ -44,7 +44,8 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
 
 (defun deliver (&key object arm target robot-location &allow-other-keys)
   "Deliver the held OBJECT to TARGET (a location designator) with ARM (NIL: the arm holding
-it), standing at ROBOT-LOCATION. Retries: a new sample of the target (4) as placing fails, a
+it), standing at ROBOT-LOCATION, at a sample of TARGET within the robot's reach there
+(TARGET-REACHABLE-FROM). Retries: a new sample of the target (4) as placing fails, a
 new base pose (15) on navigation collisions, undeliverable or manipulation failures, a new
 target (4, outermost) also when no base pose for the target can be found (a designator error). Returns the object designator; DELIVERING-FAILED when all are used up."
   (let ((?object object)
@@ -87,7 +88,15 @@ target (4, outermost) also when no base pose for the target can be found (a desi
                     (?place (list ?object ?arm ?target)))
                 (exe:perform (desig:an action (type navigating) (location ?location)
                                        (place ?place))))
-              (cpl:with-retry-counters ((target-retries 4))
+              ;; CRAM's T' = target + (reachable-from robot): the samples within reach of
+              ;; where the robot now stands
+              (let ((?target (target-reachable-from ?target (robot-name))))
+               (handler-case (desig:reference ?target)
+                 (desig:designator-error ()
+                   (cpl:fail 'common-fail:object-undeliverable
+                             :description (format nil "No sample of ~a is within reach of the ~
+                                                       robot here." target))))
+               (cpl:with-retry-counters ((target-retries 4))
                 (cpl:with-failure-handling
                     (((or common-fail:looking-high-level-failure
                           common-fail:object-unreachable
@@ -110,7 +119,7 @@ target (4, outermost) also when no base pose for the target can be found (a desi
                       (cpl:fail 'common-fail:object-unreachable
                                 :description (format nil "Placing ~a at ~a failed: ~a"
                                                      (object-text ?object) ?target e))))
-                  (desig:current-desig ?object))))))))))
+                  (desig:current-desig ?object)))))))))))
 
 (defun drop-at-sink ()
   "CRAM's fallback after a failed delivery: drive to the map origin facing -y and put the held

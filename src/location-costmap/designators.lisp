@@ -1,5 +1,5 @@
 ;;;; Location designators resolved through costmaps: the DESIG-COSTMAP predicate, the
-;;;; VISIBLE-FOR, REACHABLE-FOR and ON costmaps, the costmap location generator and validators.
+;;;; VISIBLE-FOR, REACHABLE-FOR, REACHABLE-FROM and ON costmaps, the costmap location generator and validators.
 
 (in-package :cram-location-costmap)
 
@@ -122,6 +122,38 @@ turned so that the shoulder of the ARM (when given) faces it."
             (register-height-generator costmap (make-constant-height-function 0))
             costmap))))))
 
+(defun reachable-from-costmap (designator from)
+  "The costmap of (reachable-from FROM): places within COSTMAP-IN-REACH-DISTANCE (horizontally)
+of FROM, the nearer the likelier (a gaussian around it). FROM is a robot's name (the robot's
+base pose in the belief state) or a pose or pose-stamped of the base of the robot in the
+belief state."
+  (let* ((robot-object (btr:get-robot-object))
+         (robot (cond ((and (symbolp from) from) (designator-robot-name from))
+                      (robot-object (designator-robot-name (btr:name robot-object)))
+                      (t (error "Location designator ~a: (reachable-from ~s) needs a robot in ~
+                                 the belief state." designator from))))
+         (base (cond ((symbolp from)
+                      (let ((o (robot-world-object robot)))
+                        (unless o
+                          (error "Location designator ~a: (reachable-from ~s): that robot is not ~
+                                  in the belief state." designator from))
+                        (btr:pose o)))
+                     ((or (typep from 'cl-transforms-stamped:pose-stamped)
+                          (typep from 'cl-transforms:pose))
+                      (pose-in-map from "REACHABLE-FROM pose"))
+                     (t (error "Location designator ~a: (reachable-from ~s), expected a robot ~
+                                name or a pose." designator from)))))
+    (with-robot (robot)
+      (let ((costmap (make-location-costmap))
+            (reach (metadata 'costmap-in-reach-distance)))
+        (register-cost-function costmap (make-range-cost-function (cl-transforms:origin base) reach)
+                                'reachable-from-space 5)
+        (register-cost-function costmap (make-gauss-cost-function
+                                         (cl-transforms:origin base)
+                                         (diagonal-covariance (* reach *reach-gauss-share*)))
+                                'reachable-from-weighted 4)
+        costmap))))
+
 (defun supporting-items (x-min y-min x-max y-max top exclude &optional (world btr:*current-bullet-world*))
   "Bounding rectangles (x0 y0 x1 y1) of the items standing on the surface, except EXCLUDE."
   (loop for o in (btr:objects world)
@@ -191,6 +223,10 @@ unturned), so that an object held by its side can be put down from where the rob
     (desig:loc-desig? ?designator)
     (desig:desig-prop ?designator (:on ?surface))
     (lisp-fun on-costmap ?designator ?surface ?costmap))
+  (<- (desig-costmap ?designator ?costmap)
+    (desig:loc-desig? ?designator)
+    (desig:desig-prop ?designator (:reachable-from ?from))
+    (lisp-fun reachable-from-costmap ?designator ?from ?costmap))
 
   (<- (costmap ?costmap)
     (-> (bound ?costmap)
