@@ -80,6 +80,8 @@ it, and a line of sight from the camera height; the base faces the target."
                                   (make-line-of-sight-cost-function
                                    target (robot-camera-height robot)
                                    :target-object object :stride *line-of-sight-stride*
+                                   ;; the points the visibility validator checks
+                                   :points (view-target-points target object)
                                    :world (designator-scratch-world designator robot))
                                   'line-of-sight 20)
           (register-orientation-generator costmap (make-angle-to-point-generator
