@@ -9,6 +9,10 @@
 (defparameter *stability-seconds* 1d0
   "Seconds of physics the stability check simulates (CRAM: 500 + 100 steps of 1/600 s).")
 
+(defparameter *unreachable-target-retries* 20
+  "How many further target samples a delivery tries when no base pose can be found for a
+sample (apart from CRAM's 4 retries of undeliverable targets).")
+
 (defun delivering-robot-location (target arm)
   "CRAM's default base location of a delivery: where the robot reaches TARGET with ARM."
   (let ((?robot (robot-name)) (?target target) (?arm arm))
@@ -47,7 +51,8 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
 it), standing at ROBOT-LOCATION, at a sample of TARGET within the robot's reach there
 (TARGET-REACHABLE-FROM). Retries: a new sample of the target (4) as placing fails, a
 new base pose (15) on navigation collisions, undeliverable or manipulation failures, a new
-target (4, outermost) also when no base pose for the target can be found (a designator error). Returns the object designator; DELIVERING-FAILED when all are used up."
+target (4, outermost), and a new target (*UNREACHABLE-TARGET-RETRIES*) when no base pose for
+the target sample can be found (a designator error). Returns the object designator; DELIVERING-FAILED when all are used up."
   (let ((?object object)
         (?target (reset-or-nil target))
         (?robot-location (reset-or-nil robot-location))
@@ -57,11 +62,11 @@ target (4, outermost) also when no base pose for the target can be found (a desi
            (cpl:fail 'common-fail:delivering-failed
                      :description (format nil "Delivering ~a: a designator could not be resolved: ~a"
                                           (object-text ?object) e))))
-      (cpl:with-retry-counters ((outer-target-retries 4))
+      (cpl:with-retry-counters ((outer-target-retries 4)
+                                (unreachable-target-retries *unreachable-target-retries*))
         (cpl:with-failure-handling
-            (((or common-fail:object-undeliverable desig:designator-error) (e)
-               ;; CRAM's outer target level: a target sample no base pose reaches (the robot
-               ;; location cannot be resolved for it) is given up for the next sample
+            ((common-fail:object-undeliverable (e)
+               ;; CRAM's outer target level
                (common-fail:retry-with-loc-designator-solutions
                    ?target outer-target-retries
                    (:error-object-or-string
@@ -70,6 +75,18 @@ target (4, outermost) also when no base pose for the target can be found (a desi
                     :reset-designators (remove nil (list ?robot-location))
                     :rethrow-failure 'common-fail:delivering-failed)
                  ;; the reset robot location, relative to the new target sample
+                 (setf ?robot-location (and ?robot-location
+                                            (desig:current-desig ?robot-location)))))
+             (desig:designator-error (e)
+               ;; a target sample no base pose reaches (the robot location cannot be resolved
+               ;; for it, nothing was tried): the next sample, on a budget of its own
+               (common-fail:retry-with-loc-designator-solutions
+                   ?target unreachable-target-retries
+                   (:error-object-or-string
+                    (format nil "No base pose reaches this target sample; trying another.~%~a" e)
+                    :warning-namespace (fd-plans deliver)
+                    :reset-designators (remove nil (list ?robot-location))
+                    :rethrow-failure 'common-fail:delivering-failed)
                  (setf ?robot-location (and ?robot-location
                                             (desig:current-desig ?robot-location))))))
           (cpl:with-retry-counters ((relocation-retries 15))
