@@ -156,11 +156,11 @@ free of collisions. Checked in the belief state; the robot is put back."
    (lambda ()
      (let ((base (pp-plans:pose-in-map pose)))
        (setf (btr:pose (btr:get-robot-object)) base)
-       (let ((*placing-check-samples* *placing-base-check-samples*))
-         (handler-case
-             (progn (check-placing-collisions
-                     object arm (target-reachable-from
-                                 target (cl-transforms-stamped:pose->pose-stamped
-                                         cram-tf:*fixed-frame* 0d0 base)))
-                    t)
-           ((or common-fail:object-undeliverable desig:designator-error) () nil)))))))
+       (let ((*placing-check-samples* *placing-base-check-samples*)
+             (here (target-reachable-from target (cl-transforms-stamped:pose->pose-stamped
+                                                  cram-tf:*fixed-frame* 0d0 base))))
+         (unwind-protect
+              (handler-case (progn (check-placing-collisions object arm here) t)
+                ((or common-fail:object-undeliverable desig:designator-error) () nil))
+           ;; one costmap per candidate base pose: not kept in the cache
+           (costmap:forget-designator-costmap here)))))))

@@ -280,6 +280,12 @@ robot, object or link) is signalled, not turned into a failing goal."
                (setf (gethash designator *designator-costmaps*) (or merged :none))
                merged)))))
 
+(defun forget-designator-costmap (designator)
+  "Drop the cached costmap of the location DESIGNATOR (DESIGNATOR-COSTMAP), so that its memory
+is freed before the cache would let it go: for designators made for one check only."
+  (remhash designator *designator-costmaps*)
+  designator)
+
 (defun costmap-location-generator (designator)
   "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged
 costmap of DESIGNATOR, or no candidate when no DESIG-COSTMAP rule applies or the costmap is 0

@@ -41,6 +41,7 @@
    #:costmap #:costmap-add-function #:costmap-add-orientation-generator
    #:costmap-add-height-generator #:merged-desig-costmap #:designator-costmap
    #:costmap-location-generator #:visible-for-costmap #:reachable-for-costmap #:reachable-from-costmap #:on-costmap
+   #:forget-designator-costmap
    #:robot-pose-collisions #:robot-pose-distance-validator
    #:robot-pose-visibility-validator #:robot-pose-collision-validator
    #:line-of-sight-p #:robot-camera-height
