@@ -124,14 +124,17 @@
       (is (every (lambda (p) (< (second p) 0.31d0)) points) "in its front half")
       (is (every (lambda (p) (< (abs (- (third p) (+ 0.7463d0 0.0502d0))) 5d-3)) points)
           "at the table top + the bowl's origin height")
-      ;; two slots, 0.1 m in from the long edges (x -3.65 and -3.11), 0.08 m around them
-      (is (every (lambda (p) (or (< (dist-xy p '(-3.65 0.31)) 0.081d0)
-                                 (< (dist-xy p '(-3.11 0.31)) 0.081d0)))
-                 points)
-          "within 0.08 m of a slot centre"))))
+      ;; CRAM's two slots: rows named by the table's longer side in the map (y), laid out in
+      ;; the table's frame (turned a quarter), 0.03 + 0.1 m in from its long edges: one in the
+      ;; back half (y 0.58), one in the front half (-3.38 0.04); 0.08 m around them
+      (is (every (lambda (p) (< (dist-xy p '(-3.38 0.04)) 0.081d0)) points)
+          "within 0.08 m of the front slot's centre")
+      (is (some (lambda (p) (> (dist-xy p '(-3.38 0.04)) 0.03d0)) points)
+          "spread around the slot centre"))))
 
 (defun bowl-on-table ()
-  (spawn :bowl-1 :bowl '((-3.65 0.25 0.7965) (0 0 0 1))))
+  "The bowl in the table's front slot."
+  (spawn :bowl-1 :bowl '((-3.38 0.04 0.7965) (0 0 0 1))))
 
 (test spoon-right-of-and-near-the-bowl
   (with-household-kitchen ()
@@ -140,11 +143,11 @@
     (let* ((destination (man-int:get-object-destination :spoon :iai-kitchen nil :table-setting))
            (poses (samples destination 40))
            (points (mapcar #'xyz poses)))
-      (is (every (lambda (p) (<= 0.14 (dist-xy p '(-3.65 0.25)) 0.27)) points)
+      (is (every (lambda (p) (<= 0.14 (dist-xy p '(-3.38 0.04)) 0.27)) points)
           "near: between the two objects' padded sizes and that plus their mean size")
-      ;; the bowl is nearest the table's west (+y of its frame) edge: right of it is map -y
-      (is (every (lambda (p) (let ((dx (- (first p) -3.65)) (dy (- (second p) 0.25)))
-                               (and (< dy 0) (> (/ (- dy) (sqrt (+ (* dx dx) (* dy dy)))) 0.9))))
+      ;; as in CRAM, a person at the table sits at its front (map -y) edge: right is map +x
+      (is (every (lambda (p) (let ((dx (- (first p) -3.38)) (dy (- (second p) 0.04)))
+                               (and (> dx 0) (> (/ dx (sqrt (+ (* dx dx) (* dy dy)))) 0.9))))
                  points)
           "right of the bowl, within acos 0.9 of the direction")
       (is (every (lambda (p) (< (abs (- (third p) (+ 0.7463 0.0063))) 5d-3)) points) "on the table top")
@@ -157,9 +160,9 @@
     (bowl-on-table)
     (spawn :cup-1 :cup '((1.0 0.0 2.0) (0 0 0 1)))
     (let ((points (sample-points (man-int:get-object-destination :cup :iai-kitchen nil :table-setting) 40)))
-      (is (every (lambda (p) (and (< (second p) 0.25) (> (first p) -3.65))) points)
-          "right of (map -y) and behind (map +x, towards the table's middle) the bowl")
-      (is (every (lambda (p) (<= 0.2 (dist-xy p '(-3.65 0.25)) 0.45)) points) "near the bowl"))))
+      (is (every (lambda (p) (and (> (first p) -3.38) (> (second p) 0.04))) points)
+          "right of (map +x) and behind (map +y, towards the table's middle) the bowl")
+      (is (every (lambda (p) (<= 0.2 (dist-xy p '(-3.38 0.04)) 0.45)) points) "near the bowl"))))
 
 (test far-from-keeps-away
   (with-household-kitchen ()
@@ -167,7 +170,7 @@
     (let* ((table (desig:make-designator :object '((:type :counter-top) (:urdf-name :dining-area-jokkmokk-table-main)
                                                    (:part-of :iai-kitchen))))
            (points (sample-points (location `(:on ,table) `(:far-from ,(desig:an object (type bowl) (name bowl-1)))))))
-      (is (every (lambda (p) (> (dist-xy p '(-3.65 0.25)) 0.3)) points) "beyond the far-from radius"))))
+      (is (every (lambda (p) (> (dist-xy p '(-3.38 0.04)) 0.3)) points) "beyond the far-from radius"))))
 
 (test attachments-give-the-tray-slots
   (with-household-kitchen ()

@@ -119,7 +119,8 @@ the order the table is set; the bowl must come before spoon and cup) in their cl
 containers, park the robot, transport each object to the table (context table-setting), then
 each in reverse order back (context table-cleaning). With VARIED-KITCHEN the dining table and
 the kitchen island stand a little elsewhere (VARY-KITCHEN). BTR:*VISIBILITY-THRESHOLD* is
-*DEMO-VISIBILITY-THRESHOLD* meanwhile. The random choices start from SEED (NIL: as they
+*DEMO-VISIBILITY-THRESHOLD* meanwhile, and the robot's base poses keep to the kitchen's free
+floor (COSTMAP:KITCHEN-RESTRICTED-AREA, as CRAM's demo restricts them). The random choices start from SEED (NIL: as they
 are). No failure is caught. Returns the object list."
   (let ((unknown (set-difference object-list (mapcar #'first *object-spawning-poses*))))
     (when unknown
@@ -128,8 +129,10 @@ are). No failure is caught. Returns the object list."
   (unless (btr:get-environment-object)
     (btw-tut:init-projection))
   ;; set, not bound: perception runs in the process modules' threads
-  (let ((threshold btr:*visibility-threshold*))
-    (setf btr:*visibility-threshold* *demo-visibility-threshold*)
+  (let ((threshold btr:*visibility-threshold*)
+        (restricted-area costmap:*restricted-area-function*))
+    (setf btr:*visibility-threshold* *demo-visibility-threshold*
+          costmap:*restricted-area-function* #'costmap:kitchen-restricted-area)
     (unwind-protect
          (progn
            (when seed (seed-demo seed))
@@ -144,7 +147,8 @@ are). No failure is caught. Returns the object list."
              (dolist (type (reverse object-list))
                (transport type :table-cleaning))
              (park-robot)))
-      (setf btr:*visibility-threshold* threshold)))
+      (setf btr:*visibility-threshold* threshold
+            costmap:*restricted-area-function* restricted-area)))
   object-list)
 
 (defun in-dishwasher-p (position)

@@ -9,6 +9,10 @@
 (defparameter *stability-seconds* 1d0
   "Seconds of physics the stability check simulates (CRAM: 500 + 100 steps of 1/600 s).")
 
+(defparameter *unreachable-target-retries* 20
+  "How many further target samples a delivery tries when no base pose can be found for a
+sample (apart from CRAM's 4 retries of undeliverable targets).")
+
 (defun delivering-robot-location (target arm)
   "CRAM's default base location of a delivery: where the robot reaches TARGET with ARM."
   (let ((?robot (robot-name)) (?target target) (?arm arm))
@@ -44,9 +48,11 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
 
 (defun deliver (&key object arm target robot-location &allow-other-keys)
   "Deliver the held OBJECT to TARGET (a location designator) with ARM (NIL: the arm holding
-it), standing at ROBOT-LOCATION. Retries: a new sample of the target (4) as placing fails, a
+it), standing at ROBOT-LOCATION, at a sample of TARGET within the robot's reach there
+(TARGET-REACHABLE-FROM). Retries: a new sample of the target (4) as placing fails, a
 new base pose (15) on navigation collisions, undeliverable or manipulation failures, a new
-target (4, outermost). Returns the object designator; DELIVERING-FAILED when all are used up."
+target (4, outermost), and a new target (*UNREACHABLE-TARGET-RETRIES*) when no base pose for
+the target sample can be found (a designator error). Returns the object designator; DELIVERING-FAILED when all are used up."
   (let ((?object object)
         (?target (reset-or-nil target))
         (?robot-location (reset-or-nil robot-location))
@@ -56,16 +62,33 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
            (cpl:fail 'common-fail:delivering-failed
                      :description (format nil "Delivering ~a: a designator could not be resolved: ~a"
                                           (object-text ?object) e))))
-      (cpl:with-retry-counters ((outer-target-retries 4))
+      (cpl:with-retry-counters ((outer-target-retries 4)
+                                (unreachable-target-retries *unreachable-target-retries*))
         (cpl:with-failure-handling
             ((common-fail:object-undeliverable (e)
+               ;; CRAM's outer target level
                (common-fail:retry-with-loc-designator-solutions
                    ?target outer-target-retries
                    (:error-object-or-string
                     (format nil "Undeliverable. Trying another target location.~%~a" e)
                     :warning-namespace (fd-plans deliver)
                     :reset-designators (remove nil (list ?robot-location))
-                    :rethrow-failure 'common-fail:delivering-failed))))
+                    :rethrow-failure 'common-fail:delivering-failed)
+                 ;; the reset robot location, relative to the new target sample
+                 (setf ?robot-location (and ?robot-location
+                                            (desig:current-desig ?robot-location)))))
+             (desig:designator-error (e)
+               ;; a target sample no base pose reaches (the robot location cannot be resolved
+               ;; for it, nothing was tried): the next sample, on a budget of its own
+               (common-fail:retry-with-loc-designator-solutions
+                   ?target unreachable-target-retries
+                   (:error-object-or-string
+                    (format nil "No base pose reaches this target sample; trying another.~%~a" e)
+                    :warning-namespace (fd-plans deliver)
+                    :reset-designators (remove nil (list ?robot-location))
+                    :rethrow-failure 'common-fail:delivering-failed)
+                 (setf ?robot-location (and ?robot-location
+                                            (desig:current-desig ?robot-location))))))
           (cpl:with-retry-counters ((relocation-retries 15))
             (cpl:with-failure-handling
                 (((or common-fail:navigation-goal-in-collision
@@ -82,7 +105,15 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
                     (?place (list ?object ?arm ?target)))
                 (exe:perform (desig:an action (type navigating) (location ?location)
                                        (place ?place))))
-              (cpl:with-retry-counters ((target-retries 4))
+              ;; CRAM's T' = target + (reachable-from robot): the samples within reach of
+              ;; where the robot now stands
+              (let ((?target (target-reachable-from ?target (robot-name))))
+               (handler-case (desig:reference ?target)
+                 (desig:designator-error ()
+                   (cpl:fail 'common-fail:object-undeliverable
+                             :description (format nil "No sample of ~a is within reach of the ~
+                                                       robot here." target))))
+               (cpl:with-retry-counters ((target-retries 4))
                 (cpl:with-failure-handling
                     (((or common-fail:looking-high-level-failure
                           common-fail:object-unreachable
@@ -105,7 +136,7 @@ target (4, outermost). Returns the object designator; DELIVERING-FAILED when all
                       (cpl:fail 'common-fail:object-unreachable
                                 :description (format nil "Placing ~a at ~a failed: ~a"
                                                      (object-text ?object) ?target e))))
-                  (desig:current-desig ?object))))))))))
+                  (desig:current-desig ?object)))))))))))
 
 (defun drop-at-sink ()
   "CRAM's fallback after a failed delivery: drive to the map origin facing -y and put the held

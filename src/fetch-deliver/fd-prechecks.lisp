@@ -72,18 +72,21 @@ OBJECT-UNREACHABLE when none does."
 
 (defun check-placing-collisions (object arm target)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
-which ARM puts OBJECT down free of collisions (the designator of that solution); signals
+which ARM puts OBJECT down free of collisions (the designator of that solution; samples beyond
+*PLACING-REACH* of the base are not tried); signals
 OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pose."
   (let ((current target) (?object object) (?arm arm))
     (loop repeat *placing-check-samples*
           while current
-          do (let* ((?target current)
-                    (grounding (first (pp-plans:ground-action
-                                       :placing (desig:an action (type placing) (object ?object)
-                                                          (arm ?arm) (target ?target)))))
-                    (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
-               (when (pp-plans::with-object-being-placed (object current)
-                       (trajectory-reachable-p arm trajectory '(:putting)))
+          do (let ((?target current))
+               (when (and (within-placing-reach-p (desig:reference current))
+                          (let* ((grounding (first (pp-plans:ground-action
+                                                    :placing (desig:an action (type placing)
+                                                                       (object ?object) (arm ?arm)
+                                                                       (target ?target)))))
+                                 (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
+                            (pp-plans::with-object-being-placed (object current)
+                              (trajectory-reachable-p arm trajectory '(:putting)))))
                  (return-from check-placing-collisions current))
                (setf current (desig:next-solution current))))
     (cpl:fail 'common-fail:object-undeliverable
@@ -123,16 +126,41 @@ state; the robot is put back."
      (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps) t)
        (common-fail:object-unreachable () nil)))))
 
-(defparameter *placing-base-check-samples* 5
-  "How many target samples the choice of a delivery's base pose tries from each candidate pose.")
+(defparameter *placing-base-check-samples* 12
+  "How many target samples the choice of a delivery's base pose tries from each candidate pose
+(three places when a surface gives each place in four orientations).")
+
+(defparameter *placing-reach* 1.0d0
+  "Metres (horizontally, from the base's origin) beyond which the placing pre-check does not
+try a target sample: no arm of the robot reaches that far.")
+
+(defun within-placing-reach-p (pose)
+  "True when the map POSE is within *PLACING-REACH* of the robot's base horizontally."
+  (let ((p (cl-transforms:origin (pp-plans:pose-in-map pose)))
+        (b (cl-transforms:origin (btr:pose (btr:get-robot-object)))))
+    (<= (sqrt (+ (expt (- (cl-transforms:x p) (cl-transforms:x b)) 2)
+                 (expt (- (cl-transforms:y p) (cl-transforms:y b)) 2)))
+        *placing-reach*)))
+
+(defun target-reachable-from (target from)
+  "TARGET (a location designator), at its current solution's description, restricted to the
+places reachable from FROM (the robot's name or a base pose): CRAM's T' = target +
+(reachable-from robot). A fresh designator, not equated with TARGET."
+  (desig:extend-designator-properties (desig:current-desig target) `((:reachable-from ,from))))
 
 (defun object-placeable-from-p (object arm target pose)
   "True when the robot, standing at POSE (map), puts OBJECT held in ARM down at one of the first
-*PLACING-BASE-CHECK-SAMPLES* solutions of TARGET free of collisions. Checked in the belief
-state; the robot is put back."
+*PLACING-BASE-CHECK-SAMPLES* solutions of TARGET within its reach (TARGET-REACHABLE-FROM)
+free of collisions. Checked in the belief state; the robot is put back."
   (call-restoring-robot
    (lambda ()
-     (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
-     (let ((*placing-check-samples* *placing-base-check-samples*))
-       (handler-case (progn (check-placing-collisions object arm target) t)
-         (common-fail:object-undeliverable () nil))))))
+     (let ((base (pp-plans:pose-in-map pose)))
+       (setf (btr:pose (btr:get-robot-object)) base)
+       (let ((*placing-check-samples* *placing-base-check-samples*)
+             (here (target-reachable-from target (cl-transforms-stamped:pose->pose-stamped
+                                                  cram-tf:*fixed-frame* 0d0 base))))
+         (unwind-protect
+              (handler-case (progn (check-placing-collisions object arm here) t)
+                ((or common-fail:object-undeliverable desig:designator-error) () nil))
+           ;; one costmap per candidate base pose: not kept in the cache
+           (costmap:forget-designator-costmap here)))))))

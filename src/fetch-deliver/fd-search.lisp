@@ -35,7 +35,10 @@ search). Returns the perceived object designator; SEARCHING-FAILED when all are 
                      (:error-object-or-string e :warning-namespace (fd-plans search-for-object)
                       :reset-designators (remove nil (list ?robot-location))
                       :rethrow-failure 'common-fail:searching-failed
-                      :distance-threshold 0.1))))
+                      :distance-threshold 0.1)
+                   ;; the reset robot location, relative to the new search location sample
+                   (setf ?robot-location (and ?robot-location
+                                              (desig:current-desig ?robot-location))))))
             (cpl:with-retry-counters ((robot-location-retries 5))
               (cpl:with-failure-handling
                   (((or common-fail:navigation-goal-in-collision

@@ -144,22 +144,27 @@ body would block the rays cast from where it is going to stand."
 
 (defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
                                                                    target-object (stride 2)
-                                                                   ignore-objects)
-  "A cost function that is 1 at the map points from which the ray at CAMERA-HEIGHT to TARGET
-(a 3D point) reaches it (or its TARGET-OBJECT) unobstructed in WORLD, else 0; the objects named
-IGNORE-OBJECTS (e.g. the robot) do not block.  On a grid it casts one ray per STRIDE x STRIDE
-block of cells that are not zero yet."
+                                                                   ignore-objects
+                                                                   (points (list target)))
+  "A cost function that is 1 at the map points from which enough of the rays at CAMERA-HEIGHT
+to POINTS (3D points; default TARGET alone; ENOUGH-POINTS-SEEN-P) reach them (or
+TARGET-OBJECT) unobstructed in WORLD, else 0; the objects named IGNORE-OBJECTS (e.g. the robot) do not block.  On a grid it casts
+one ray per point and STRIDE x STRIDE block of cells that are not zero yet."
   (unless (typep stride '(integer 1 64))
     (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
   (unless (and (realp camera-height) (< (abs camera-height) 1d3))
     (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: camera height ~s, expected a real." camera-height))
   (let* ((world (if ignore-objects (world-without ignore-objects world) world))
-         (goal (xyz target))
+         (goals (progn (xyz target) (mapcar #'xyz points)))
          (h (coerce camera-height 'double-float))
          (handle (object-handle-of target-object)))
     (make-cost-function
      (lambda (x y)
-       (if (first (rays-clear world (list (list (float x 1d0) (float y 1d0) h)) goal handle)) 1d0 0d0))
+       (let ((eye (list (list (float x 1d0) (float y 1d0) h))))
+         (if (enough-points-seen-p (count-if (lambda (goal) (first (rays-clear world eye goal handle)))
+                                             goals)
+                                   (length goals))
+             1d0 0d0)))
      :name 'line-of-sight
      :grid-evaluator
      (lambda (costmap matrix r0 r1 c0 c1)
@@ -172,14 +177,17 @@ block of cells that are not zero yet."
                                                      thereis (> (aref matrix r c) 0d0)))
                           do (push (cons br bc) blocks)))
          (setf blocks (nreverse blocks))
-         (loop for (br . bc) in blocks
-               for clear in (rays-clear world
-                                        (loop for (br . bc) in blocks
-                                              collect (list (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
-                                                            (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
-                                                            h))
-                                        goal handle)
-               unless clear
+         (loop with eyes = (loop for (br . bc) in blocks
+                                 collect (list (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
+                                               (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
+                                               h))
+               with seen = (let ((counts (make-list (length blocks) :initial-element 0)))
+                             (dolist (goal goals counts)
+                               (setf counts (mapcar (lambda (n clear) (if clear (1+ n) n))
+                                                    counts (rays-clear world eyes goal handle)))))
+               for (br . bc) in blocks
+               for n in seen
+               unless (enough-points-seen-p n (length goals))
                  do (loop for r from br below (min r1 (+ br stride))
                           do (loop for c from bc below (min c1 (+ bc stride))
                                    do (setf (aref matrix r c) 0d0)))))))))
@@ -203,11 +211,19 @@ centre and top of its bounding box and the middles of its four vertical sides."
                 (cl-transforms:make-3d-vector cx (- cy sy) cz)
                 (cl-transforms:make-3d-vector cx (+ cy sy) cz))))))
 
+(defun enough-points-seen-p (count total)
+  "True when COUNT of TOTAL view target points seen make the object seen: the share of them
+BTR:*VISIBILITY-THRESHOLD* asks of an object's visible part (at least one; all of a single
+point)."
+  (>= count (max 1 (ceiling (* (min 1 (max 0 btr:*visibility-threshold*)) total)))))
+
 (defun line-of-sight-p (eye points target-object &key (world btr:*current-bullet-world*))
-  "True when every ray from EYE (a 3D point) to POINTS reaches its point (up to
-*LINE-OF-SIGHT-TOLERANCE*), or TARGET-OBJECT, unobstructed in WORLD."
+  "True when enough of the rays from EYE (a 3D point) to POINTS (ENOUGH-POINTS-SEEN-P) reach
+their point (up to *LINE-OF-SIGHT-TOLERANCE*), or TARGET-OBJECT, unobstructed in WORLD."
   (let ((e (xyz eye)) (handle (object-handle-of target-object)))
-    (every (lambda (p) (first (rays-clear world (list e) (xyz p) handle))) points)))
+    (enough-points-seen-p (count-if (lambda (p) (first (rays-clear world (list e) (xyz p) handle)))
+                                    points)
+                          (length points))))
 
 ;;; ---- robot base poses in collision -------------------------------------------------------------------
 

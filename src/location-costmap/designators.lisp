@@ -1,5 +1,5 @@
 ;;;; Location designators resolved through costmaps: the DESIG-COSTMAP predicate, the
-;;;; VISIBLE-FOR, REACHABLE-FOR and ON costmaps, the costmap location generator and validators.
+;;;; VISIBLE-FOR, REACHABLE-FOR, REACHABLE-FROM and ON costmaps, the costmap location generator and validators.
 
 (in-package :cram-location-costmap)
 
@@ -80,6 +80,8 @@ it, and a line of sight from the camera height; the base faces the target."
                                   (make-line-of-sight-cost-function
                                    target (robot-camera-height robot)
                                    :target-object object :stride *line-of-sight-stride*
+                                   ;; the points the visibility validator checks
+                                   :points (view-target-points target object)
                                    :world (designator-scratch-world designator robot))
                                   'line-of-sight 20)
           (register-orientation-generator costmap (make-angle-to-point-generator
@@ -122,6 +124,38 @@ turned so that the shoulder of the ARM (when given) faces it."
             (register-height-generator costmap (make-constant-height-function 0))
             costmap))))))
 
+(defun reachable-from-costmap (designator from)
+  "The costmap of (reachable-from FROM): places within COSTMAP-IN-REACH-DISTANCE (horizontally)
+of FROM, the nearer the likelier (a gaussian around it). FROM is a robot's name (the robot's
+base pose in the belief state) or a pose or pose-stamped of the base of the robot in the
+belief state."
+  (let* ((robot-object (btr:get-robot-object))
+         (robot (cond ((and (symbolp from) from) (designator-robot-name from))
+                      (robot-object (designator-robot-name (btr:name robot-object)))
+                      (t (error "Location designator ~a: (reachable-from ~s) needs a robot in ~
+                                 the belief state." designator from))))
+         (base (cond ((symbolp from)
+                      (let ((o (robot-world-object robot)))
+                        (unless o
+                          (error "Location designator ~a: (reachable-from ~s): that robot is not ~
+                                  in the belief state." designator from))
+                        (btr:pose o)))
+                     ((or (typep from 'cl-transforms-stamped:pose-stamped)
+                          (typep from 'cl-transforms:pose))
+                      (pose-in-map from "REACHABLE-FROM pose"))
+                     (t (error "Location designator ~a: (reachable-from ~s), expected a robot ~
+                                name or a pose." designator from)))))
+    (with-robot (robot)
+      (let ((costmap (make-location-costmap))
+            (reach (metadata 'costmap-in-reach-distance)))
+        (register-cost-function costmap (make-range-cost-function (cl-transforms:origin base) reach)
+                                'reachable-from-space 5)
+        (register-cost-function costmap (make-gauss-cost-function
+                                         (cl-transforms:origin base)
+                                         (diagonal-covariance (* reach *reach-gauss-share*)))
+                                'reachable-from-weighted 4)
+        costmap))))
+
 (defun supporting-items (x-min y-min x-max y-max top exclude &optional (world btr:*current-bullet-world*))
   "Bounding rectangles (x0 y0 x1 y1) of the items standing on the surface, except EXCLUDE."
   (loop for o in (btr:objects world)
@@ -133,10 +167,19 @@ turned so that the shoulder of the ARM (when given) faces it."
                      (list (list (cl-transforms:x lo) (cl-transforms:y lo)
                                  (cl-transforms:x hi) (cl-transforms:y hi)))))))
 
+(defun items-free-space-function (items margin)
+  "A cost function: 0 within MARGIN metres of the rectangles ITEMS ((x0 y0 x1 y1) ...), else 1."
+  (lambda (x y)
+    (if (loop for (a b c d) in items
+              thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
+        0d0 1d0)))
+
 (defun on-costmap (designator surface)
   "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a
 margin (half the size of the FOR object, when given), away from the items already there; the
-height is the surface top, plus the FOR object's height of its origin above its bottom."
+height is the surface top, plus the FOR object's height of its origin above its bottom. Poses
+for a FOR object come in four orientations, quarter turns about the vertical (the first
+unturned), so that an object held by its side can be put down from where the robot stands."
   (let* ((for (desig:desig-prop-value designator :for))
          (for-object (and for (typep for 'desig:object-designator)
                           (object-designator-world-object for))))
@@ -159,15 +202,12 @@ height is the surface top, plus the FOR object's height of its origin above its 
                                                               (max cx (- x1 margin)) (max cy (- y1 margin)))
                                 'on-surface 0)
         (when items
-          (register-cost-function
-           costmap
-           (lambda (x y)
-             (if (loop for (a b c d) in items
-                       thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
-                 0d0 1d0))
-           'on-free-space 5))
+          (register-cost-function costmap (items-free-space-function items margin)
+                                  'on-free-space 5))
         (register-height-generator costmap (make-constant-height-function (+ top lift)))
-        (register-orientation-generator costmap (make-identity-orientation-generator))
+        (register-orientation-generator costmap (if for-object
+                                                    (make-quarter-turns-orientation-generator)
+                                                    (make-identity-orientation-generator)))
         costmap))))
 
 ;;; ---- the Prolog interface ------------------------------------------------------------------------
@@ -185,6 +225,10 @@ height is the surface top, plus the FOR object's height of its origin above its 
     (desig:loc-desig? ?designator)
     (desig:desig-prop ?designator (:on ?surface))
     (lisp-fun on-costmap ?designator ?surface ?costmap))
+  (<- (desig-costmap ?designator ?costmap)
+    (desig:loc-desig? ?designator)
+    (desig:desig-prop ?designator (:reachable-from ?from))
+    (lisp-fun reachable-from-costmap ?designator ?from ?costmap))
 
   (<- (costmap ?costmap)
     (-> (bound ?costmap)
@@ -235,6 +279,12 @@ robot, object or link) is signalled, not turned into a failing goal."
                  (clrhash *designator-costmaps*))
                (setf (gethash designator *designator-costmaps*) (or merged :none))
                merged)))))
+
+(defun forget-designator-costmap (designator)
+  "Drop the cached costmap of the location DESIGNATOR (DESIGNATOR-COSTMAP), so that its memory
+is freed before the cache would let it go: for designators made for one check only."
+  (remhash designator *designator-costmaps*)
+  designator)
 
 (defun costmap-location-generator (designator)
   "Location generator: the infinite lazy list of pose-stamped samples (frame map) of the merged

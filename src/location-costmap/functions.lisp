@@ -158,6 +158,18 @@ pose), rotated by OFFSET radians, with SAMPLES orientations SAMPLE-STEP apart."
     (declare (ignore x y previous))
     (list (cl-transforms:make-identity-rotation))))
 
+(defun make-quarter-turns-orientation-generator ()
+  "An orientation generator that gives each previous orientation (the identity when there is
+none) and the same turned about the vertical by a quarter, a half and three quarters of a turn:
+an object to be put down on a surface may stand turned as its grasp and the robot's side need."
+  (lambda (x y previous)
+    (declare (ignore x y))
+    (loop for k from 0 below 4
+          for turn = (cl-transforms:axis-angle->quaternion (cl-transforms:make-3d-vector 0 0 1)
+                                                           (* k (/ pi 2)))
+          append (mapcar (lambda (q) (cl-transforms:q* turn q))
+                         (or previous (list (cl-transforms:make-identity-rotation)))))))
+
 (defun make-constant-height-function (height)
   "A height generator giving HEIGHT (metres) everywhere."
   (unless (and (realp height) (not (and (floatp height) (sb-ext:float-nan-p height))) (< (abs height) 1d6))

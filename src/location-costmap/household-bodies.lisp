@@ -141,6 +141,11 @@ tops of their boxes."
                                  (cl-transforms:make-3d-vector 1 0 0))))
     (atan (cl-transforms:y x) (cl-transforms:x x))))
 
+(defun body-map-half-extent (body)
+  "(values half-x half-y) of BODY's box in the map."
+  (values (/ (- (cl-transforms:x (body-hi body)) (cl-transforms:x (body-lo body))) 2)
+          (/ (- (cl-transforms:y (body-hi body)) (cl-transforms:y (body-lo body))) 2)))
+
 (defun body-local-extent (body)
   "(values half-x half-y) of BODY's box in its own frame (from its world box and yaw)."
   (let* ((yaw (body-yaw body)) (c (abs (cos yaw))) (s (abs (sin yaw)))

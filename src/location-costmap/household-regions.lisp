@@ -161,8 +161,10 @@ preferred (+) long edge, the rest along the other one, MIN metres in from the ed
       (append (row preferred short) (row other (- short))))))
 
 (defun slot-costmap (designator context)
-  "(context table-setting) (for O) (object-count N) on a surface: N slots along its long edges,
-places within *SLOT-DEVIATION* of their centres."
+  "(context table-setting) (for O) (object-count N) on a surface: N slots in two rows, places
+within *SLOT-DEVIATION* of their centres. As in CRAM, the rows run along the axis of the
+surface's frame that is named by the longer side of its box in the map, MIN slot size in from
+the other two edges (so a surface turned a quarter has its rows across its halves)."
   (unless (eq (keyword-of context) :table-setting)
     (error "Location designator ~a: (context ~s), expected TABLE-SETTING." designator context))
   (let* ((surface (desig:desig-prop-value designator :on))
@@ -179,7 +181,9 @@ places within *SLOT-DEVIATION* of their centres."
          (sizes (or (cdr (assoc type *slot-sizes*)) *default-slot-size*))
          (paddings (or (cdr (assoc (body-link body) *table-setting-paddings* :test #'equal))
                        '(0d0 0d0 0d0 0d0))))
-    (multiple-value-bind (hx hy) (body-local-extent body)
+    ;; as CRAM: the extents of the surface's box in the map, the slots in the surface's frame
+    ;; (for the dining table, turned a quarter, the rows lie across its front and back halves)
+    (multiple-value-bind (hx hy) (body-map-half-extent body)
       (destructuring-bind (px+ px- py+ py-) paddings
         (let* ((phx (max 0d0 (- hx (/ (+ px+ px-) 2)))) (phy (max 0d0 (- hy (/ (+ py+ py-) 2))))
                (shift-x (/ (- px+ px-) 2)) (shift-y (/ (- py+ py-) 2))

@@ -58,9 +58,11 @@ reference object is more than acos(T) off the relation's axis are excluded.")
 
 (defun closest-edge (support x y)
   "The edge (:FRONT :BACK :LEFT :RIGHT) of the SUPPORT body nearest the map point (X Y),
-distances to the longer edges counted shorter by the ratio of the sides."
+distances to the longer edges counted shorter by the ratio of the sides. As in CRAM, the sides
+are the extents of the support's box in the map, compared with the point in the support's
+frame: on the dining table, turned a quarter, a person sits at its front (map -y) edge."
   (multiple-value-bind (lx ly) (body-local-point support x y)
-    (multiple-value-bind (hx hy) (body-local-extent support)
+    (multiple-value-bind (hx hy) (body-map-half-extent support)
       (let ((ratio-x (if (> hx hy) (/ hx (max hy 1d-6)) 1d0))
             (ratio-y (if (> hy hx) (/ hy (max hx 1d-6)) 1d0)))
         (if (< (* ratio-x (- hx (abs lx))) (* ratio-y (- hy (abs ly))))
@@ -129,8 +131,10 @@ angle off it, 0 where that cosine is below THRESHOLD or on the other side."
     (if found (check-real value "(threshold ...)" designator :min 0 :max 1) *default-relation-threshold*)))
 
 (defun relations-costmap (designator)
-  "Every relation of DESIGNATOR to other objects in one costmap; without ON, IN or ABOVE also
-the support's box (shrunk for the FOR object) and its top as the height."
+  "Every relation of DESIGNATOR to other objects in one costmap, clear (by half the FOR
+object's size) of the items on the reference object's support; without ON, IN or ABOVE also
+the support's box (shrunk for the FOR object), its top as the height and, for a FOR object,
+quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION-GENERATOR)."
   (let ((costmap (make-location-costmap))
         (threshold (relation-threshold designator)))
     (multiple-value-bind (for-half for-lift for-object) (for-object-geometry designator)
@@ -153,6 +157,17 @@ the support's box (shrunk for the FOR object) and its top as the height."
                                                                         (cl-transforms:y point))
                                                       point support threshold)
                             key 7))))))
+        ;; a FOR object is put down clear of the items already on the support by half its
+        ;; size, as on a surface (ON-COSTMAP), not into them
+        (when for-object
+          (let* ((support (relation-support-body designator))
+                 (lo (body-lo support)) (hi (body-hi support))
+                 (items (supporting-items (cl-transforms:x lo) (cl-transforms:y lo)
+                                          (cl-transforms:x hi) (cl-transforms:y hi)
+                                          (cl-transforms:z hi) for-object)))
+            (when items
+              (register-cost-function costmap (items-free-space-function items for-half)
+                                      'relation-free-space 5))))
         (unless (some (lambda (key) (desig:desig-prop-value designator key)) '(:on :in :above))
           (let ((support (relation-support-body designator)))
             (register-cost-function costmap (shrunk-box-function (body-lo support) (body-hi support)
@@ -160,7 +175,9 @@ the support's box (shrunk for the FOR object) and its top as the height."
                                     'supporting-object 9)
             (register-height-generator costmap (make-constant-height-function
                                                 (+ (cl-transforms:z (body-hi support)) for-lift)))
-            (register-orientation-generator costmap (make-identity-orientation-generator))))
+            (register-orientation-generator costmap (if for-object
+                                                        (make-quarter-turns-orientation-generator)
+                                                        (make-identity-orientation-generator)))))
         costmap))))
 
 (defun has-relation-p (designator)

@@ -25,6 +25,7 @@
    #:make-constant-height-function #:make-matrix-cost-function
    #:make-axis-boundary-cost-function #:make-angle-to-point-generator
    #:make-orientation-generator #:make-identity-orientation-generator
+   #:make-quarter-turns-orientation-generator
    ;; occupancy grids
    #:occupancy-grid #:make-occupancy-grid
    #:invalid-probability-distribution
@@ -39,7 +40,8 @@
    ;; designators and the belief state
    #:costmap #:costmap-add-function #:costmap-add-orientation-generator
    #:costmap-add-height-generator #:merged-desig-costmap #:designator-costmap
-   #:costmap-location-generator #:visible-for-costmap #:reachable-for-costmap #:on-costmap
+   #:costmap-location-generator #:visible-for-costmap #:reachable-for-costmap #:reachable-from-costmap #:on-costmap
+   #:forget-designator-costmap
    #:robot-pose-collisions #:robot-pose-distance-validator
    #:robot-pose-visibility-validator #:robot-pose-collision-validator
    #:line-of-sight-p #:robot-camera-height

@@ -69,8 +69,10 @@ object, or the reference of its LOCATION property."
                     designator (btr:object-names world))))))
 
 (defun location-designator-target (designator)
-  "The point of the first solution of the location DESIGNATOR."
-  (let ((solution (desig:reference designator)))
+  "The point of the solution the location DESIGNATOR stands at now: that of its newest
+version (DESIG:CURRENT-DESIG), so that a robot location relative to a target follows the
+target to its next solution when a plan retries with one."
+  (let ((solution (desig:reference (desig:current-desig designator))))
     (values (cl-transforms:origin (pose-in-map solution (format nil "solution of ~a" designator)))
             nil)))
 
