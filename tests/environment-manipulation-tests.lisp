@@ -324,6 +324,35 @@ muffled; returns its value (or the error) and the log text."
       (is (search "Handle slipped" (princ-to-string value)))))
   (is (zerop (joint "sink_area_left_upper_drawer_main_joint")) "a slipped handle moves nothing"))
 
+(test a-pull-that-fails-is-goal-not-reached
+  "When the pulling motion fails (here: a stuck drawer, injected at the arm action), opening
+ends in ENVIRONMENT-MANIPULATION-GOAL-NOT-REACHED naming the container, the gripper lets go of
+the handle and the drawer stays where it was; no other handle grasp is tried for it."
+  (btw-tut:init-projection)
+  (let ((old (fdefinition 'env-man::perform-arm-motion))
+        (pulls 0))
+    (unwind-protect
+         (progn
+           (setf (fdefinition 'env-man::perform-arm-motion)
+                 (lambda (type arm poses &rest rest)
+                   (if (eq type :pulling)
+                       (progn (incf pulls)
+                              (cpl:fail 'common-fail:manipulation-pose-unreachable
+                                        :description "the drawer is stuck"))
+                       (apply old type arm poses rest))))
+           (multiple-value-bind (value log) (run-logged (open-drawer-form 0.3))
+             (is (typep value 'common-fail:environment-manipulation-goal-not-reached)
+                 "opening a stuck drawer gave ~s" value)
+             (is (search "sink_area_left_upper_drawer_main" (substitute #\_ #\- (string-downcase (princ-to-string value))))
+                 "the failure does not name the drawer: ~a" value)
+             (is (search "Pulling" (princ-to-string value)))
+             (is (= 1 pulls) "the pull was tried ~d times" pulls)
+             (is (zerop (count-in "Grasp " log)) "another handle grasp was tried"))
+           (is (zerop (joint "sink_area_left_upper_drawer_main_joint")) "the stuck drawer moved")
+           (is (> (btr:joint-state (btr:get-robot-object) "r_gripper_l_finger_joint") 0.3)
+               "the gripper still holds the handle"))
+      (setf (fdefinition 'env-man::perform-arm-motion) old))))
+
 (test environment-manipulation-bad-input
   (btw-tut:init-projection)
   (flet ((fails-with (thunk text)
