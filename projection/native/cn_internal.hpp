@@ -198,6 +198,10 @@ struct Model {
   std::vector<int> order;         // joints in topological order
   int root = 0;
   std::unordered_map<std::string, int> link_index, joint_index;
+  // What the sweep checks need of each link (cn_sweep.cpp), made on first use and shared by
+  // every world using the model; guarded by cache_mu.
+  mutable std::mutex cache_mu;
+  mutable std::shared_ptr<const void> sweep_links;
 };
 using ModelP = std::shared_ptr<const Model>;
 ModelP parse_urdf(const std::string &xml, MeshMode meshes);

@@ -19,6 +19,53 @@ namespace cn {
 namespace {
 using namespace sweep;
 
+// The convex pieces of shape S placed at LOCAL, into OUT; a triangle mesh or plane stands in
+// as its local box (kept in OWNED).
+void collect_pieces(const btCollisionShape *s, const btTransform &local, std::vector<Piece> &out,
+                    std::vector<std::unique_ptr<btCollisionShape>> &owned) {
+  if (s->isCompound()) {
+    auto *c = static_cast<const btCompoundShape *>(s);
+    for (int i = 0; i < c->getNumChildShapes(); ++i)
+      collect_pieces(c->getChildShape(i), local * c->getChildTransform(i), out, owned);
+  } else if (s->isConvex()) {
+    out.push_back({static_cast<const btConvexShape *>(s), local});
+  } else {
+    btVector3 lo, hi;
+    s->getAabb(btTransform::getIdentity(), lo, hi);
+    btVector3 half = (hi - lo) * 0.5;
+    half.setMax(btVector3(1e-4, 1e-4, 1e-4));
+    auto box = std::make_unique<btBoxShape>(half);
+    box->setMargin(0);
+    btTransform at(btQuaternion::getIdentity(), (hi + lo) * 0.5);
+    out.push_back({box.get(), local * at});
+    owned.push_back(std::move(box));
+  }
+}
+
+// ROBOT's links as the sweeps need them (chains, pieces, radii), made once per model and
+// remade when a link body's shape is not the one they were made for.
+std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
+  const Model &md = *robot.model;
+  std::lock_guard<std::mutex> lock(md.cache_mu);
+  auto info = std::static_pointer_cast<const ModelSweepInfo>(md.sweep_links);
+  bool ok = info && info->links.size() == robot.link_rb.size();
+  for (size_t l = 0; ok && l < robot.link_rb.size(); ++l)
+    ok = (robot.link_rb[l] ? robot.link_rb[l]->getCollisionShape() : nullptr) == info->links[l].shape;
+  if (ok) return info;
+  auto fresh = std::make_shared<ModelSweepInfo>();
+  fresh->links.resize(robot.link_rb.size());
+  for (size_t l = 0; l < robot.link_rb.size(); ++l) {
+    if (!robot.link_rb[l]) continue;
+    LinkInfo &li = fresh->links[l];
+    li.shape = robot.link_rb[l]->getCollisionShape();
+    link_chain(md, (int)l, li.chain);
+    collect_pieces(li.shape, btTransform::getIdentity(), li.pieces, fresh->owned);
+    li.radius = shape_radius(li.shape);
+  }
+  md.sweep_links = fresh;
+  return fresh;
+}
+
 struct Sweep {
   World &w;
   const Object *robot = nullptr;            // null for a body sweep
@@ -29,8 +76,16 @@ struct Sweep {
   std::vector<char> needed;
   std::vector<btTransform> lp;               // link poses at the time asked last
   std::vector<Mover> movers;
+  std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
+  std::deque<std::vector<Piece>> body_pieces;            // pieces of moving bodies
+  std::deque<std::vector<int>> body_chains;              // chains of attached bodies
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
-  std::set<int> moving_ids;
+  std::vector<int> moving_ids;                           // the robot and what it carries
+  bool any_anchor = false;                               // some mover hangs from a moving joint
+
+  bool moving(int id) const {
+    return std::find(moving_ids.begin(), moving_ids.end(), id) != moving_ids.end();
+  }
   const int *ignore4 = nullptr;
   int n_ignore = 0;
   double tol = 1e-3;
@@ -65,12 +120,13 @@ struct Sweep {
     return btTransform(r, base0.getOrigin().lerp(base1.getOrigin(), t));
   }
 
-  // The frame of mover M at time T; link poses computed into lp when the robot moves.
+  // The frame of mover M at time T; the links the movers hang from (their anchors, see run)
+  // computed into lp, unless FK_DONE says they are for T already.
   btTransform pose_at(const Mover &m, double t, bool fk_done = false) {
     btTransform base = base_at(t);
-    if (!robot || m.frame_link < 0) return base * m.rel;
+    if (m.anchor < 0) return base * m.rel_anchor;
     if (!fk_done) fk(t, base);
-    return lp[m.frame_link] * m.rel;
+    return lp[m.anchor] * m.rel_anchor;
   }
 
   void fk(double t, const btTransform &base) {
@@ -78,28 +134,9 @@ struct Sweep {
     compute_link_poses(*robot->model, base, qt, lp, &needed);
   }
 
-  void add_pieces(Mover &m, const btCollisionShape *s, const btTransform &local) {
-    if (s->isCompound()) {
-      auto *c = static_cast<const btCompoundShape *>(s);
-      for (int i = 0; i < c->getNumChildShapes(); ++i)
-        add_pieces(m, c->getChildShape(i), local * c->getChildTransform(i));
-    } else if (s->isConvex()) {
-      m.pieces.push_back({static_cast<const btConvexShape *>(s), local});
-    } else {  // a triangle mesh or plane on a moving body: its local box stands in
-      btVector3 lo, hi;
-      s->getAabb(btTransform::getIdentity(), lo, hi);
-      btVector3 half = (hi - lo) * 0.5;
-      half.setMax(btVector3(1e-4, 1e-4, 1e-4));
-      auto box = std::make_unique<btBoxShape>(half);
-      box->setMargin(0);
-      btTransform at(btQuaternion::getIdentity(), (hi + lo) * 0.5);
-      m.pieces.push_back({box.get(), local * at});
-      owned.push_back(std::move(box));
-    }
-  }
-
   Mover &add_mover(int obj, int link, const btCollisionObject *co, int frame_link,
-                   const btTransform &rel) {
+                   const btTransform &rel, const std::vector<int> *chain,
+                   const std::vector<Piece> &pieces, double radius) {
     movers.emplace_back();
     Mover &m = movers.back();
     m.obj = obj;
@@ -107,10 +144,21 @@ struct Sweep {
     m.co = co;
     m.frame_link = frame_link;
     m.rel = rel;
-    add_pieces(m, co->getCollisionShape(), btTransform::getIdentity());
-    m.radius = shape_radius(co->getCollisionShape());
-    moving_ids.insert(obj);
+    m.chain = chain;
+    m.pieces = {pieces.data(), pieces.data() + pieces.size()};
+    m.radius = radius;
+    if (!moving(obj)) moving_ids.push_back(obj);
     return m;
+  }
+
+  // A moving body (attached object or a body swept on its own): its pieces kept here.
+  void add_body_mover(int obj, const btCollisionObject *co, int frame_link, const btTransform &rel,
+                      std::vector<int> chain) {
+    body_chains.push_back(std::move(chain));
+    body_pieces.emplace_back();
+    const btCollisionShape *s = co->getCollisionShape();
+    collect_pieces(s, btTransform::getIdentity(), body_pieces.back(), owned);
+    add_mover(obj, -1, co, frame_link, rel, &body_chains.back(), body_pieces.back(), shape_radius(s));
   }
 
   // Rigidly attached bodies of PARENT (and theirs), hanging from FRAME_LINK at REL.
@@ -119,13 +167,13 @@ struct Sweep {
     for (const Attachment &a : w.attachments) {
       if (a.parent != parent || a.loose) continue;
       Object *c = w.objects[a.obj];
-      if (!c || c->kind != CN_BODY || !c->rb || moving_ids.count(a.obj)) continue;
+      if (!c || c->kind != CN_BODY || !c->rb || moving(a.obj)) continue;
       int fl = depth == 0 ? a.link : frame_link;
       btTransform r = depth == 0 ? a.rel : rel * a.rel;
-      moving_ids.insert(a.obj);  // carried objects are never hit by their carrier
+      moving_ids.push_back(a.obj);  // carried objects are never hit by their carrier
       std::vector<int> chain;
       if (robot && fl >= 0) link_chain(*robot->model, fl, chain);
-      if (chain_moves(chain)) add_mover(a.obj, -1, c->rb, fl, r).chain = chain;
+      if (chain_moves(chain)) add_body_mover(a.obj, c->rb, fl, r, std::move(chain));
       add_attached(a.obj, fl, r, depth + 1);
     }
   }
@@ -143,8 +191,8 @@ struct Sweep {
       double reach = m.radius;
       double W = angle, B = dtrans;
       btVector3 p0 = o0, p1 = o1;
-      for (int k = (int)m.chain.size() - 1; k >= 0; --k) {
-        int j = m.chain[k];
+      for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
+        int j = (*m.chain)[k];
         int child = robot->model->joints[j].child;
         btVector3 c0 = lp0[child].getOrigin(), c1 = lp1[child].getOrigin();
         reach += std::max((p0 - c0).length(), (p1 - c1).length());
@@ -163,6 +211,16 @@ struct Sweep {
       m.W = W;
       m.B = B;
     }
+  }
+
+  // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
+  bool ignored_by_all(int hobj, int hlink) const {
+    for (int i = 0; i < n_ignore; ++i) {
+      const int *r = ignore4 + 4 * i;
+      if (r[0] == -1 && r[1] == -1 && (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
+        return true;
+    }
+    return false;
   }
 
   bool ignored(const Mover &m, int hobj, int hlink) const {
@@ -209,30 +267,44 @@ struct Sweep {
       lo.setMin(mlo[i]);
       hi.setMax(mhi[i]);
     }
+    // the bodies in the union of the move boxes, their boxes side by side for the tests below
     struct Found : btBroadphaseAabbCallback {
       const Sweep *s;
-      std::vector<const btCollisionObject *> out;
+      std::vector<const btBroadphaseProxy *> out;
+      std::vector<btVector3> lo, hi;
+      std::vector<std::array<int, 4>> id;  // object, link, filter group, filter mask
       bool process(const btBroadphaseProxy *bp) override {
         auto *co = static_cast<const btCollisionObject *>(bp->m_clientObject);
-        int ob = co->getUserIndex();
-        if (!(s->robot && ob == s->robot->id) && !s->moving_ids.count(ob)) out.push_back(co);
+        int ob, lb;
+        decode_rb(co, ob, lb);
+        if ((s->robot && ob == s->robot->id) || s->moving(ob) || s->ignored_by_all(ob, lb))
+          return true;
+        out.push_back(bp);
+        lo.push_back(bp->m_aabbMin);
+        hi.push_back(bp->m_aabbMax);
+        id.push_back({ob, lb, bp->m_collisionFilterGroup, bp->m_collisionFilterMask});
         return true;
       }
     } found;
     found.s = this;
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
+    size_t nf = found.out.size();
     for (size_t i = 0; i < nm; ++i) {
       Mover &m = movers[i];
       m.candidates.clear();
+      m.cand_lo.clear();
+      m.cand_hi.clear();
       const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
       int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
-      for (const btCollisionObject *co : found.out) {
-        const btBroadphaseProxy *h = co->getBroadphaseHandle();
-        if (!TestAabbAgainstAabb2(mlo[i], mhi[i], h->m_aabbMin, h->m_aabbMax)) continue;
-        if (!(h->m_collisionFilterGroup & mask) || !(group & h->m_collisionFilterMask)) continue;
-        int ob, lb;
-        decode_rb(co, ob, lb);
-        if (!ignored(m, ob, lb)) m.candidates.push_back(co);
+      const btVector3 &ml = mlo[i], &mh = mhi[i];
+      for (size_t f = 0; f < nf; ++f) {
+        if (!TestAabbAgainstAabb2(ml, mh, found.lo[f], found.hi[f])) continue;
+        const std::array<int, 4> &id = found.id[f];
+        if (!(id[2] & mask) || !(group & id[3])) continue;
+        if (ignored(m, id[0], id[1])) continue;
+        m.candidates.push_back(static_cast<const btCollisionObject *>(found.out[f]->m_clientObject));
+        m.cand_lo.push_back(found.lo[f]);
+        m.cand_hi.push_back(found.hi[f]);
       }
       m.done.assign(m.candidates.size(), 0);
       m.clear_until.assign(m.candidates.size(), 0);
@@ -305,6 +377,40 @@ struct Sweep {
 
   bool base_moves = false;
 
+  // needed: the links LINK_OF(mover) gives and the links on their way from the root.
+  template <class F>
+  void mark_needed(F link_of) {
+    const Model &md = *robot->model;
+    needed.assign(md.links.size(), 0);
+    for (const Mover &m : movers)
+      for (int l = link_of(m); l >= 0;) {
+        if (needed[l]) break;
+        needed[l] = 1;
+        int pj = md.links[l].parent_joint;
+        l = pj >= 0 ? md.joints[pj].parent : -1;
+      }
+    needed[md.root] = 1;
+  }
+
+  // Each mover's anchor: the child link of the last joint on its chain that changes in this
+  // move (-1: none, it rides on the base), and its frame relative to the anchor at the start,
+  // which stays so (the joints after the anchor keep their values). Only the anchors' poses
+  // are computed along the move.
+  void set_anchors(const std::vector<btTransform> &lp0) {
+    any_anchor = false;
+    for (Mover &m : movers) {
+      m.anchor = -1;
+      if (!robot || m.frame_link < 0) {
+        m.rel_anchor = m.rel;
+        continue;
+      }
+      for (int j : *m.chain)
+        if (dv[j] != 0) m.anchor = robot->model->joints[j].child;
+      any_anchor |= m.anchor >= 0;
+      m.rel_anchor = (m.anchor >= 0 ? lp0[m.anchor] : base0).inverseTimes(lp0[m.frame_link] * m.rel);
+    }
+  }
+
   // The joint changes, once the ends are set.
   void prepare() {
     base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
@@ -324,10 +430,11 @@ struct Sweep {
 
   void run(double max_step) {
     std::vector<btTransform> lp0, lp1;
-    if (robot) {
+    if (robot) {  // the poses at the ends of the links the movers hang from
+      mark_needed([](const Mover &m) { return m.frame_link; });
       const Model &md = *robot->model;
-      compute_link_poses(md, base0, q0, lp0);
-      compute_link_poses(md, base1, q1, lp1);
+      compute_link_poses(md, base0, q0, lp0, &needed);
+      compute_link_poses(md, base1, q1, lp1, &needed);
     }
     bound_movers(lp0, lp1);
     // movers that do not move meet nothing they did not touch already
@@ -335,24 +442,17 @@ struct Sweep {
                                 [&](const Mover &m) { return !base_moves && m.B == 0; }),
                  movers.end());
     if (movers.empty()) return;
+    set_anchors(lp0);
     double total_rot = angle, total_trans = (base1.getOrigin() - base0.getOrigin()).length();
     if (robot) {
       std::vector<char> seen(q0.size(), 0);
       for (const Mover &m : movers)
-        for (int j : m.chain)
+        for (int j : *m.chain)
           if (!seen[j]) {
             seen[j] = 1;
             (robot->model->joints[j].type == CN_JOINT_PRISMATIC ? total_trans : total_rot) += std::fabs(dv[j]);
           }
-      needed.assign(robot->model->links.size(), 0);
-      for (const Mover &m : movers)
-        for (int l = m.frame_link; l >= 0;) {
-          if (needed[l]) break;
-          needed[l] = 1;
-          int pj = robot->model->links[l].parent_joint;
-          l = pj >= 0 ? robot->model->joints[pj].parent : -1;
-        }
-      needed[robot->model->root] = 1;
+      mark_needed([](const Mover &m) { return m.anchor; });
       qt = q0;
       lp = lp0;
     }
@@ -364,6 +464,7 @@ struct Sweep {
     while ((double)(1 << levels) < n_real) ++levels;
     n = 1 << levels;
     gather_candidates(lp0, lp1);
+    point_slot.assign(n + 1, -1);
     pool.resize(levels + 2);
     for (size_t i = 0; i < movers.size(); ++i) {
       if (movers[i].candidates.empty()) continue;
@@ -376,28 +477,29 @@ struct Sweep {
 
   // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
   int levels = 0, n = 1;
-  std::unordered_map<int, int> point_slot;   // sub-step point k -> its slot
+  std::vector<int> point_slot;               // sub-step point k -> its slot (-1: none yet)
+  int n_slots = 0;
   std::vector<btTransform> slot_pose;        // per slot, one pose per mover
   std::vector<btVector3> slot_lo, slot_hi;   // per slot, one box per mover
   std::vector<std::vector<int>> pool;        // candidate lists per depth
 
   // The slot of the movers' poses and boxes at time k / n (computed once).
   int slot(int k) {
-    auto it = point_slot.find(k);
-    if (it != point_slot.end()) return it->second;
+    if (point_slot[k] >= 0) return point_slot[k];
     size_t nm = movers.size();
-    int sl = (int)point_slot.size();
-    point_slot.emplace(k, sl);
+    int sl = n_slots++;
+    point_slot[k] = sl;
     slot_pose.resize((sl + 1) * nm);
     slot_lo.resize((sl + 1) * nm);
     slot_hi.resize((sl + 1) * nm);
     double t = (double)k / n;
-    if (robot) fk(t, base_at(t));
+    btTransform base = base_at(t);
+    if (robot && any_anchor) fk(t, base);
     for (size_t i = 0; i < nm; ++i) {
       const Mover &m = movers[i];
       if (m.candidates.empty()) continue;
       size_t at = sl * nm + i;
-      slot_pose[at] = pose_at(m, t, true);
+      slot_pose[at] = m.anchor < 0 ? base * m.rel_anchor : lp[m.anchor] * m.rel_anchor;
       m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
     }
     return sl;
@@ -423,8 +525,7 @@ struct Sweep {
     keep.clear();
     for (int c : pool[depth]) {
       if (m.done[c] || tb <= m.clear_until[c]) continue;
-      const btBroadphaseProxy *hp = m.candidates[c]->getBroadphaseHandle();
-      if (TestAabbAgainstAabb2(lo, hi, hp->m_aabbMin, hp->m_aabbMax)) keep.push_back(c);
+      if (TestAabbAgainstAabb2(lo, hi, m.cand_lo[c], m.cand_hi[c])) keep.push_back(c);
     }
     if (keep.empty()) return;
     if (kb - ka == 8) {
@@ -560,11 +661,14 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
     s->q0.assign(q_from, q_from + nj);
     s->q1.assign(q_to, q_to + nj);
     s->set_ends(b0, b1);
-    std::vector<int> chain;
+    s->info = model_sweep_info(r);
+    s->movers.reserve(r.link_rb.size() + w.attachments.size());
     for (size_t l = 0; l < r.link_rb.size(); ++l) {
       if (!r.link_rb[l]) continue;
-      link_chain(*r.model, (int)l, chain);
-      if (s->chain_moves(chain)) s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity()).chain = chain;
+      const LinkInfo &li = s->info->links[l];
+      if (s->chain_moves(li.chain))
+        s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity(), &li.chain,
+                     li.pieces, li.radius);
     }
     s->add_attached(rh, -1, btTransform::getIdentity(), 0);
     s->run(max_step);
@@ -583,7 +687,8 @@ int cn_body_sweep_check(int wh, int bh, const double *from7, const double *to7, 
     check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
     std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
     s->set_ends(t0, t1);
-    s->add_mover(bh, -1, b.rb, -1, btTransform::getIdentity());
+    s->movers.reserve(1 + w.attachments.size());
+    s->add_body_mover(bh, b.rb, -1, btTransform::getIdentity(), {});
     s->add_attached(bh, -1, btTransform::getIdentity(), 1);
     s->run(max_step);
     return write_hits(s->hits, out4, outd, cap);

@@ -5,6 +5,7 @@
 
 #include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
 #include <algorithm>
+#include <deque>
 
 namespace cn {
 namespace sweep {
@@ -71,16 +72,37 @@ struct Piece {                    // one convex piece of a moving body, in the b
   btTransform local;
 };
 
+struct Span {                     // a run of pieces held elsewhere
+  const Piece *b = nullptr, *e = nullptr;
+  const Piece *begin() const { return b; }
+  const Piece *end() const { return e; }
+};
+
+// What a sweep needs of one robot link, the same in every call: kept per model.
+struct LinkInfo {
+  const btCollisionShape *shape = nullptr;  // the link body's shape it was made for
+  std::vector<int> chain;                   // movable joints from the root to the link
+  std::vector<Piece> pieces;
+  double radius = 0;
+};
+struct ModelSweepInfo {
+  std::vector<LinkInfo> links;
+  std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
+};
+
 struct Mover {                    // a moving robot link, attached object or body
   int obj = -1, link = -1;        // as reported
   const btCollisionObject *co = nullptr;
   int frame_link = -1;            // robot link it hangs from; -1: the base (or the body itself)
   btTransform rel;                // its frame relative to that link (or the base)
-  std::vector<int> chain;         // movable joints from the root to frame_link
-  std::vector<Piece> pieces;
+  const std::vector<int> *chain = nullptr;  // movable joints from the root to frame_link
+  Span pieces;
+  int anchor = -1;                // last link on the chain a changing joint moves (-1: the base)
+  btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
   std::vector<const btCollisionObject *> candidates;
+  std::vector<btVector3> cand_lo, cand_hi;  // their broadphase boxes
   std::vector<char> done;         // per candidate: reported, or left out (start contact)
   std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
 };
