@@ -149,6 +149,7 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "debugging")
                (:file "implementation-package")
                (:file "task-tree")
+               (:file "task-pool")
                (:file "tasks")
                (:file "failures")
                (:file "language")
@@ -472,6 +473,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "language-tree-tests")
                (:file "cpl-api-tests")
                (:file "cpl-tasks-tests")
+               (:file "cpl-task-threads-tests")
                (:file "cram-walker-tests")
                (:file "language-quiet-log-tests")))
 

@@ -21,8 +21,10 @@
 
 (defun thread-count ()
   "The number of threads, without SBCL's finalizer thread (started on demand
-by the garbage collector at any time)."
-  (count-if-not (lambda (thread) (equal (bt:thread-name thread) "finalizer"))
+by the garbage collector at any time) and the task threads waiting for a task."
+  (count-if-not (lambda (thread) (member (bt:thread-name thread)
+                                         (list "finalizer" cpl:*idle-task-thread-name*)
+                                         :test #'equal))
                 (bt:all-threads)))
 
 (defun settled-thread-count (start)

@@ -88,6 +88,8 @@ worlds besides the load-time belief state)."
   ;; .asd again (~0.1 s; ASDF:SYSTEM-RELATIVE-PATHNAME in the first run does one): do it here.
   (asdf:find-system "cram-plans")
   (warm-up)
+  ;; the plan threads WARM-UP's runs left waiting for tasks
+  (cpl:stop-idle-task-threads)
   ;; The belief states made at load time and by WARM-UP: their native worlds will not exist in
   ;; the new process, and a finalizer would destroy whichever new world gets the same handle.
   (setf btr:*current-bullet-world* nil)

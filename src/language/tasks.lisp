@@ -37,7 +37,8 @@ projection environment's clock or the current designators.")
   (finish-order nil)
   (evaporate-requested nil)
   (evaporating nil)
-  (aborted nil))
+  (aborted nil)
+  (released t))   ; NIL while its thread (SPAWN-TASK) still runs the task's code
 
 (setf (documentation 'task-name 'function) "The name of a task."
       (documentation 'task-status 'function)
@@ -164,16 +165,35 @@ given node is used."
     (sb-sys:without-interrupts
       (bt:with-lock-held ((task-group-lock group))
         (push task (task-group-tasks group)))
+      (setf (task-released task) nil)
       (setf (task-thread task)
-            (bt:make-thread
-             (lambda ()
-               (progv (car bindings) (cdr bindings)
-                 (let ((*current-task* task)
-                       (*task-tree-node* parent-node)
-                       (*evaporation-target* nil))
-                   (execute-task task thunk node))))
-             :name (format nil "cpl ~a" name))))
+            (run-in-task-thread
+             (format nil "cpl ~a" name)
+             (lambda (offer-thread)
+               (unwind-protect
+                    (progv (car bindings) (cdr bindings)
+                      (let ((*current-task* task)
+                            (*task-tree-node* parent-node)
+                            (*evaporation-target* nil))
+                        (execute-task task thunk node)))
+                 (release-task task offer-thread))))))
     task))
+
+(defun release-task (task offer-thread)
+  "Note that TASK's thread has left the task's code, after calling OFFER-THREAD (which offers
+the thread for another task)."
+  (funcall offer-thread)
+  (let ((group (task-group task)))
+    (bt:with-lock-held ((task-group-lock group))
+      (setf (task-released task) t)
+      (sb-thread:condition-broadcast (task-group-condition group)))))
+
+(defun wait-for-release (task)
+  "Wait until TASK's thread has left the task's code."
+  (let ((group (task-group task)))
+    (bt:with-lock-held ((task-group-lock group))
+      (loop until (task-released task)
+            do (sb-thread:condition-wait (task-group-condition group) (task-group-lock group))))))
 
 (defun evaporate-task (task)
   "Ask TASK's thread to unwind, unless it has finished already."
@@ -198,15 +218,14 @@ TASK's own thread."
     (throw task :evaporated)))
 
 (defun evaporate-and-join (group)
-  "Evaporate every unfinished task of GROUP and wait for all their threads."
+  "Evaporate every unfinished task of GROUP and wait until all their threads have left them."
   (sb-sys:without-interrupts
     (let ((tasks (bt:with-lock-held ((task-group-lock group))
                    (copy-list (task-group-tasks group)))))
       (mapc #'evaporate-task tasks)
       (dolist (task tasks)
-        (let ((thread (task-thread task)))
-          (when thread
-            (sb-thread:join-thread thread :default nil))
+        (progn
+          (wait-for-release task)
           (unless (task-done-p task)
             (setf (task-status task) :evaporated)
             (note-task-status task)))))))

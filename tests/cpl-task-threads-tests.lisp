@@ -1,0 +1,88 @@
+;;;; Tests of the threads plan tasks run in: a finished task's thread runs the next task, keeps
+;;;; nothing of the task before, and a late evaporation request meant for the task before does
+;;;; not reach the next one.
+
+(defpackage :cram-cpl-task-threads-tests
+  (:use :cl :fiveam))
+
+(in-package :cram-cpl-task-threads-tests)
+
+(def-suite cpl-task-threads :in cram-plans-tests:all
+  :description "The threads plan tasks run in: reuse, bindings, late evaporation requests.")
+(in-suite cpl-task-threads)
+
+(defun par-threads ()
+  "The threads the two branches of a PAR ran in."
+  (let ((a nil) (b nil))
+    (cpl:top-level
+      (cpl:par (setf a sb-thread:*current-thread*) (setf b sb-thread:*current-thread*)))
+    (list a b)))
+
+(defmacro with-idle-limit ((n) &body body)
+  "Run BODY with at most N idle task threads (the threads read the global value), the idle
+threads stopped before and after."
+  (let ((old (gensym)))
+    `(let ((,old cpl:*max-idle-task-threads*))
+       (cpl:stop-idle-task-threads)
+       (unwind-protect (progn (setf cpl:*max-idle-task-threads* ,n) ,@body)
+         (setf cpl:*max-idle-task-threads* ,old)
+         (cpl:stop-idle-task-threads)))))
+
+(defun idle-threads ()
+  (remove cpl:*idle-task-thread-name* (sb-thread:list-all-threads)
+          :key #'sb-thread:thread-name :test-not #'equal))
+
+(test finished-task-threads-run-the-next-tasks
+  (with-idle-limit (8)
+    (let ((first (par-threads)) (second (par-threads)))
+      (is (= 2 (length (remove-duplicates first))))
+      (is (subsetp second first) "the second PAR started new threads: ~s, then ~s" first second)
+      (is (= 2 (length (idle-threads))))
+      (is (every (lambda (th) (equal cpl:*idle-task-thread-name* (sb-thread:thread-name th))) second))
+      (is (= 2 (cpl:stop-idle-task-threads)))
+      (is (null (idle-threads)))
+      (is (notany #'sb-thread:thread-alive-p first)))))
+
+(test no-idle-threads-when-the-limit-is-zero
+  (with-idle-limit (0)
+    (let ((threads (par-threads)))
+      (is (null (idle-threads)))
+      (loop repeat 100 while (some #'sb-thread:thread-alive-p threads) do (sleep 0.01))
+      (is (notany #'sb-thread:thread-alive-p threads)))))
+
+(test idle-threads-stay-bounded
+  (with-idle-limit (3)
+    (cpl:top-level (cpl:par 1 2 3 4 5 6))
+    (is (= 3 (length (idle-threads))))))
+
+(defvar *inherited* :global "A special the tests' plans inherit.")
+(pushnew '*inherited* cpl:*inherited-specials*)
+
+(test a-task-sees-its-own-bindings-not-those-of-the-task-before
+  (with-idle-limit (8)
+    (let ((seen '()))
+      (let ((*inherited* :first))
+        (cpl:top-level (cpl:par (push *inherited* seen) (push *inherited* seen))))
+      (cpl:top-level (cpl:par (push *inherited* seen) (push *inherited* seen)))
+      (is (equal '(:global :global :first :first) seen))
+      ;; a task thread waiting for work holds no binding of a task (NIL: none of its own)
+      (is (= 2 (length (idle-threads))))
+      (is (every (lambda (th)
+                   (member (sb-thread:symbol-value-in-thread '*inherited* th nil) '(nil :global)))
+                 (idle-threads))))))
+
+(test a-late-evaporation-request-does-not-reach-the-next-task
+  (with-idle-limit (8)
+   (let ((old nil) (thread nil) (reused nil) (done nil))
+    (cpl:top-level (cpl:par (setf old cpl:*current-task* thread sb-thread:*current-thread*)))
+    (is (cpl:task-done-p old))
+    (cpl:top-level
+      (cpl:par (progn
+                 (setf reused (eq thread sb-thread:*current-thread*))
+                 ;; the interrupt an evaporation of the old task sends, arriving now
+                 (sb-thread:interrupt-thread sb-thread:*current-thread*
+                                             (lambda () (cpl::evaporate-self old)))
+                 (cpl:sleep 0.02)
+                 (setf done t))))
+    (is (eq t reused) "the PAR child did not reuse the thread")
+    (is (eq t done) "the next task was unwound by a request for the one before"))))
