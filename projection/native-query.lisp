@@ -5,6 +5,8 @@
 (defcn "cn_world_contacts" :int (w :int) (th :double) (o4 :pointer) (d :pointer) (cap :int))
 (defcn "cn_object_contacts" :int (w :int) (o :int) (th :double) (o4 :pointer) (d :pointer)
   (cap :int))
+(defcn "cn_object_contacts_except" :int (w :int) (o :int) (th :double) (ex :pointer) (n :int)
+  (o4 :pointer) (d :pointer) (cap :int))
 (defcn "cn_closest_distance" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (maxd :double)
   (out :pointer))
 (defcn "cn_ignore_pair" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (ignore :int))
@@ -47,12 +49,21 @@ plain bodies.  Ignored pairs and filtered groups are left out."
   (let ((th (real-arg threshold 'world-contacts "threshold")))
     (%collect-pairs (lambda (pi4 pd cap) (ccall "cn_world_contacts" world th pi4 pd cap)))))
 
-(defun object-contacts (world object &key (threshold 0d0))
-  "Contacts of OBJECT (all links of an articulated object) with every other object, as a
-list of (object link other other-link distance)."
+(defun object-contacts (world object &key (threshold 0d0) except)
+  "Contacts of OBJECT (all links of an articulated object) with every other object but those
+of EXCEPT (a list of object handles, whose contacts are not looked for), as a list of (object
+link other other-link distance)."
   (let ((th (real-arg threshold 'object-contacts "threshold")))
-    (%collect-pairs (lambda (pi4 pd cap)
-                      (ccall "cn_object_contacts" world object th pi4 pd cap)))))
+    (if except
+        (let ((ex (make-array (length except) :element-type '(signed-byte 32))))
+          (loop for h in except for i from 0
+                do (setf (aref ex i) (int-arg h 'object-contacts "object to leave out")))
+          (%collect-pairs (lambda (pi4 pd cap)
+                            (with-vector-pointers ((pex ex))
+                              (ccall "cn_object_contacts_except" world object th pex (length ex)
+                                     pi4 pd cap)))))
+        (%collect-pairs (lambda (pi4 pd cap)
+                          (ccall "cn_object_contacts" world object th pi4 pd cap))))))
 
 (defun closest-distance (world object-a object-b &key (link-a -1) (link-b -1) (max-distance 1d0))
   "Closest distance between OBJECT-A and OBJECT-B (or the given links), searched up to

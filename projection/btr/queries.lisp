@@ -2,14 +2,15 @@
 
 (in-package :cram-bullet-reasoning)
 
-(defun contact-records (world &optional object)
-  "Contacts of WORLD (or of OBJECT only) as (object-a link-a object-b link-b) with objects and
-link names (NIL for plain bodies)."
+(defun contact-records (world &optional object except)
+  "Contacts of WORLD (or of OBJECT only, leaving out those with the objects of EXCEPT) as
+\(object-a link-a object-b link-b) with objects and link names (NIL for plain bodies)."
   (check-world world 'contact-records)
   (let* ((w (world-handle world))
          (raw (if object
                   (with-live-object (object 'contacts)
-                    (native:object-contacts w (object-handle object)))
+                    (native:object-contacts w (object-handle object)
+                                            :except (mapcar #'object-handle except)))
                   (native:world-contacts w))))
     (loop for (ha la hb lb) in raw
           for a = (object-by-handle world ha)

@@ -47,11 +47,20 @@ static void check_out(int cap, const void *a, const void *b) {
   }
 }
 
+// Whether object OB is one of the N objects of EXCEPT.
+static bool excepted(int ob, const int *except, int n) {
+  for (int i = 0; i < n; ++i)
+    if (except[i] == ob) return true;
+  return false;
+}
+
 struct ObjectContacts : btCollisionWorld::ContactResultCallback {
   World &w;
   int self;
   double threshold;
   PairList &pairs;
+  const int *except = nullptr;  // objects whose contacts are not looked for
+  int n_except = 0;
   ObjectContacts(World &wd, int s, double t, PairList &p, int group, int mask)
       : w(wd), self(s), threshold(t), pairs(p) {
     m_collisionFilterGroup = group;
@@ -61,7 +70,7 @@ struct ObjectContacts : btCollisionWorld::ContactResultCallback {
   bool needsCollision(btBroadphaseProxy *proxy) const override {
     if (!ContactResultCallback::needsCollision(proxy)) return false;
     auto *co = static_cast<btCollisionObject *>(proxy->m_clientObject);
-    return co->getUserIndex() != self;
+    return co->getUserIndex() != self && !excepted(co->getUserIndex(), except, n_except);
   }
   btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *a, int, int,
                            const btCollisionObjectWrapper *b, int, int) override {
@@ -101,19 +110,26 @@ struct PairDistance : btCollisionWorld::ContactResultCallback {
 // Contacts of every link of the articulated object O with other objects: what contactTest of
 // each link finds, from one broadphase query of the union of the links' boxes (instead of one
 // tree query per link, most of whose hits would be the object's own links).
-static void articulated_contacts(World &w, const Object &o, double threshold, PairList &pairs) {
+static void articulated_contacts(World &w, const Object &o, double threshold, PairList &pairs,
+                                 const int *except, int n_except) {
   btVector3 lo, hi;
   if (!union_aabb(o, -1, lo, hi)) return;
   struct Others : btBroadphaseAabbCallback {
     int self;
+    const int *except;
+    int n_except;
     std::vector<btBroadphaseProxy *> found;
     bool process(const btBroadphaseProxy *p) override {
       auto *co = static_cast<const btCollisionObject *>(p->m_clientObject);
-      if (co->getUserIndex() != self) found.push_back(const_cast<btBroadphaseProxy *>(p));
+      int ob = co->getUserIndex();
+      if (ob != self && !excepted(ob, except, n_except))
+        found.push_back(const_cast<btBroadphaseProxy *>(p));
       return true;
     }
   } others;
   others.self = o.id;
+  others.except = except;
+  others.n_except = n_except;
   w.dw->getBroadphase()->aabbTest(lo, hi, others);
   if (others.found.empty()) return;
   for (size_t l = 0; l < o.link_rb.size(); ++l) {
@@ -203,19 +219,28 @@ int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap
 }
 
 int cn_object_contacts(int wh, int oh, double threshold, int *out4, double *dist, int cap) {
+  return cn_object_contacts_except(wh, oh, threshold, nullptr, 0, out4, dist, cap);
+}
+
+int cn_object_contacts_except(int wh, int oh, double threshold, const int *except, int n_except,
+                              int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);
     sync_aabbs(w);
     Object &o = w.obj(oh);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
+    if (n_except < 0) fail(CN_E_ARG, "%d objects to leave out, expected >= 0", n_except);
+    if (n_except > 0) check_ptr(except, "objects to leave out");
     PairList &pairs = scratch_pairs();
     if (o.kind == CN_BODY) {
       auto *bp = o.rb->getBroadphaseHandle();
       ObjectContacts cb(w, oh, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
+      cb.except = except;
+      cb.n_except = n_except;
       w.dw->contactTest(o.rb, cb);
     } else {
-      articulated_contacts(w, o, threshold, pairs);
+      articulated_contacts(w, o, threshold, pairs, except, n_except);
     }
     if (o.kind == CN_ARTICULATED && o.self_collision) {
       for (size_t i = 0; i < o.link_rb.size(); ++i)

@@ -170,6 +170,9 @@ int cn_robot_set_self_collision(int world, int robot, int enabled);      /* defa
 int cn_world_contacts(int world, double threshold, int *out4, double *out_dist, int cap);
 int cn_object_contacts(int world, int obj, double threshold, int *out4, double *out_dist,
                        int cap);                     /* obj (all its links) against others */
+/* The same, leaving out the contacts with the n_except objects of except (their handles). */
+int cn_object_contacts_except(int world, int obj, double threshold, const int *except,
+                              int n_except, int *out4, double *out_dist, int cap);
 /* Closest distance between two objects (link -1 = whole object), searched up to max_dist.
  * out7: distance, point on A xyz, point on B xyz.  Returns 1 if a pair closer than max_dist
  * was found, 0 if not (distance then = max_dist). */

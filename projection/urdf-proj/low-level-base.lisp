@@ -13,9 +13,12 @@ with anything but the robot and each other. Contacts of the robot with the floor
 planes) and the contacts the motion is meant to make (INTENDED-CONTACTS: the hands with the
 objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do not count."
   (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
+         (attached-objects (remove nil (mapcar (lambda (name) (btr:object world name)) attached)))
+         (planes (remove :static-plane (btr:objects world) :key #'btr:object-kind :test-not #'eq))
          (intended (intended-contacts robot))
          (hits '()))
-    (loop for (a la b lb) in (btr::contact-records world robot)
+    ;; the floor and the carried objects are not looked for: their contacts do not count
+    (loop for (a la b lb) in (btr::contact-records world robot (append planes attached-objects))
           for other = (if (eq a robot) b a)
           for link = (if (eq a robot) la lb)
           for other-link = (if (eq a robot) lb la)
@@ -27,7 +30,7 @@ objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do 
     (dolist (name attached)
       (let ((o (btr:object world name)))
         (when o
-          (loop for (a la b lb) in (btr::contact-records world o)
+          (loop for (a la b lb) in (btr::contact-records world o (cons robot attached-objects))
                 for other = (if (eq a o) b a)
                 for other-link = (if (eq a o) lb la)
                 unless (or (eq other robot) (member (btr:name other) attached)

@@ -68,6 +68,17 @@ int main() {
   double dist[16];
   CHECK(cn_world_contacts(w, 1e-3, pairs, dist, 16) >= 1);
   CHECK(cn_object_contacts(w, box, 1e-3, pairs, dist, 16) >= 1);
+  {  // leaving out the ground (object 0): none of its contacts, the others kept
+    int all = cn_object_contacts(w, box, 1e-3, pairs, dist, 16);
+    int ground = 0;
+    for (int i = 0; i < all; ++i) ground += pairs[4 * i + 2] == 0 || pairs[4 * i] == 0;
+    CHECK(ground >= 1);
+    int except[1] = {0};
+    int rest = cn_object_contacts_except(w, box, 1e-3, except, 1, pairs, dist, 16);
+    CHECK(rest == all - ground);
+    for (int i = 0; i < rest; ++i) CHECK(pairs[4 * i + 2] != 0 && pairs[4 * i] != 0);
+    CHECK(cn_object_contacts_except(w, box, 1e-3, except, -1, pairs, dist, 16) == CN_E_ARG);
+  }
   double from[3] = {0.5, 0.5, 3}, to[3] = {0.5, 0.5, -1};
   int hit[2];
   CHECK(cn_ray_test(w, from, to, 1, hit, out) == 1 && hit[0] == 0);
