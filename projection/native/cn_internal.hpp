@@ -266,6 +266,9 @@ void add_rb(World &w, btRigidBody *rb, int group, int mask);
 void teleport_rb(World &w, btRigidBody *rb, const btTransform &t);  // AABB update deferred
 bool teleport_rb_tame(World &w, btRigidBody *rb, const double *pose7);  // false: zero quaternion
 void sync_aabbs(World &w);  // broadphase AABBs of the bodies teleported since the last sync
+// The same but for the bodies of the objects KEEP_STALE (called with an object handle) is true
+// for: queries that leave those objects out keep them on the list for the next sync.
+void sync_aabbs_except(World &w, const std::function<bool(int)> &keep_stale);
 void forget_stale_aabbs(World &w);  // after updateAabbs(), which has done every body
 void set_object_pose(World &w, Object &o, const btTransform &t);
 btTransform object_pose(const Object &o);

@@ -226,8 +226,11 @@ int cn_object_contacts_except(int wh, int oh, double threshold, const int *excep
                               int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);
-    sync_aabbs(w);
     Object &o = w.obj(oh);
+    // an articulated object's own links are found by their shapes, not the broadphase: their
+    // boxes may stay out of date for the next query that reads them
+    if (o.kind == CN_ARTICULATED) sync_aabbs_except(w, [&](int ob) { return ob == oh; });
+    else sync_aabbs(w);
     check_finite(threshold, "contact threshold");
     check_out(cap, out4, dist);
     if (n_except < 0) fail(CN_E_ARG, "%d objects to leave out, expected >= 0", n_except);

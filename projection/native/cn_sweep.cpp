@@ -96,9 +96,7 @@ struct Sweep {
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
-        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {
-    sync_aabbs(w);
-  }
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {}
 
   // The base (or body) poses at the ends, then the joint changes (q0, q1 set before).
   void set_ends(const btTransform &a, const btTransform &b) {
@@ -287,6 +285,10 @@ struct Sweep {
       }
     } found;
     found.s = this;
+    found.out.reserve(256);
+    found.lo.reserve(256);
+    found.hi.reserve(256);
+    found.id.reserve(256);
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
     size_t nf = found.out.size();
     for (size_t i = 0; i < nm; ++i) {
@@ -429,6 +431,9 @@ struct Sweep {
   }
 
   void run(double max_step) {
+    // the boxes of what the movers may meet; the robot's and the carried objects' own boxes
+    // are not read (they are left out of the candidates)
+    sync_aabbs_except(w, [&](int ob) { return (robot && ob == robot->id) || moving(ob); });
     std::vector<btTransform> lp0, lp1;
     if (robot) {  // the poses at the ends of the links the movers hang from
       mark_needed([](const Mover &m) { return m.frame_link; });
@@ -465,6 +470,10 @@ struct Sweep {
     n = 1 << levels;
     gather_candidates(lp0, lp1);
     point_slot.assign(n + 1, -1);
+    size_t expect = (size_t)std::min(n + 1, 2 * levels + 8) * movers.size();
+    slot_pose.reserve(expect);
+    slot_lo.reserve(expect);
+    slot_hi.reserve(expect);
     pool.resize(levels + 2);
     for (size_t i = 0; i < movers.size(); ++i) {
       if (movers[i].candidates.empty()) continue;

@@ -134,6 +134,19 @@ void sync_aabbs(World &w) {
   forget_stale_aabbs(w);
 }
 
+void sync_aabbs_except(World &w, const std::function<bool(int)> &keep_stale) {
+  size_t kept = 0;
+  for (btCollisionObject *co : w.stale_aabbs) {
+    if (keep_stale(co->getUserIndex())) {
+      w.stale_aabbs[kept++] = co;
+      continue;
+    }
+    if (co->getBroadphaseHandle()) w.dw->updateSingleAabb(co);
+    co->setUserIndex3(0);
+  }
+  w.stale_aabbs.resize(kept);
+}
+
 btTransform object_pose(const Object &o) {
   return o.kind == CN_BODY ? o.rb->getWorldTransform() : o.base;
 }
