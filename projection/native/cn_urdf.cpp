@@ -284,6 +284,23 @@ void compute_link_poses(const Object &o, std::vector<btTransform> &out) {
   compute_link_poses(*o.model, o.base, o.q, out);
 }
 
+// The pose of joint JM's child link, its parent link at PARENT and the joint at value V.
+static inline btTransform child_pose(const JointM &jm, const btTransform &parent, double v) {
+  btTransform t = parent * jm.origin;
+  switch (jm.type) {
+    case CN_JOINT_REVOLUTE:
+    case CN_JOINT_CONTINUOUS:
+      t.setBasis(t.getBasis() * btMatrix3x3(btQuaternion(jm.axis, v)));
+      break;
+    case CN_JOINT_PRISMATIC:
+      t.setOrigin(t * (jm.axis * v));
+      break;
+    default:
+      break;
+  }
+  return t;
+}
+
 void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
                         std::vector<btTransform> &out, const std::vector<char> *needed) {
   out.resize(m.links.size());
@@ -291,20 +308,7 @@ void compute_link_poses(const Model &m, const btTransform &base, const std::vect
   for (size_t j = 0; j < m.joints.size(); ++j) {
     const JointM &jm = m.joints[j];
     if (needed && !(*needed)[jm.child]) continue;
-    btTransform t = out[jm.parent] * jm.origin;
-    double v = joint_value(m, q, (int)j);
-    switch (jm.type) {
-      case CN_JOINT_REVOLUTE:
-      case CN_JOINT_CONTINUOUS:
-        t.setBasis(t.getBasis() * btMatrix3x3(btQuaternion(jm.axis, v)));
-        break;
-      case CN_JOINT_PRISMATIC:
-        t.setOrigin(t * (jm.axis * v));
-        break;
-      default:
-        break;
-    }
-    out[jm.child] = t;
+    out[jm.child] = child_pose(jm, out[jm.parent], joint_value(m, q, (int)j));
   }
 }
 
@@ -312,6 +316,24 @@ void robot_fk(World &w, Object &o) {
   compute_link_poses(o, o.link_pose);
   for (size_t i = 0; i < o.link_rb.size(); ++i)
     if (o.link_rb[i]) teleport_rb(w, o.link_rb[i], o.link_pose[i]);
+}
+
+// After O's joint values changed from OLD_Q (its base kept): the poses of the links a changed
+// joint moves, computed as ROBOT_FK does (the others are those it would compute again), and
+// their bodies moved.
+static void robot_fk_changed(World &w, Object &o, const std::vector<double> &old_q) {
+  const Model &m = *o.model;
+  static thread_local std::vector<char> dirty;
+  dirty.assign(m.links.size(), 0);
+  for (size_t j = 0; j < m.joints.size(); ++j) {
+    const JointM &jm = m.joints[j];
+    double v = joint_value(m, o.q, (int)j);
+    if (!dirty[jm.parent] && v == joint_value(m, old_q, (int)j)) continue;
+    dirty[jm.child] = 1;
+    o.link_pose[jm.child] = child_pose(jm, o.link_pose[jm.parent], v);
+  }
+  for (size_t i = 0; i < o.link_rb.size(); ++i)
+    if (dirty[i] && o.link_rb[i]) teleport_rb(w, o.link_rb[i], o.link_pose[i]);
 }
 
 void move_attached(World &w, int parent, int depth) {
@@ -491,8 +513,11 @@ int cn_robot_set_joints(int wh, int r, const int *joints, const double *values, 
         fail(CN_E_ARG, "value of joint '%s' (element %d) is %s, expected a finite number",
              o.model->joints[joints[i]].name.c_str(), i, num(values[i]).c_str());
     }
+    static thread_local std::vector<double> old_q;
+    old_q = o.q;
     for (int i = 0; i < n; ++i) o.q[joints[i]] = values[i];
-    robot_fk(w, o);
+    if (o.link_pose.size() == o.model->links.size()) robot_fk_changed(w, o, old_q);
+    else robot_fk(w, o);
     move_attached(w, r);
     return 0;
   });

@@ -55,6 +55,18 @@ int main() {
   CHECK(cn_robot_set_joints(w, r, js, qs, 2) == 0);
   CHECK(cn_robot_link_poses(w, r, out, 3) == 3);
   CHECK(std::fabs(out[7 * 2 + 2] - 0.55) < 1e-9);
+  {  // setting some joints poses only what they move, exactly as posing everything again
+    double part[21], whole[21], base[7];
+    int j1[1] = {1};
+    double v1[1] = {0.3};
+    CHECK(cn_robot_set_joints(w, r, j1, v1, 1) == 0);
+    CHECK(cn_robot_link_poses(w, r, part, 3) == 3);
+    CHECK(memcmp(part + 14, out + 14, 7 * sizeof(double)) != 0);  // the last link moved
+    CHECK(cn_object_get_pose(w, r, base) == 0 && cn_object_set_pose(w, r, base) == 0);
+    CHECK(cn_robot_link_poses(w, r, whole, 3) == 3);
+    CHECK(memcmp(part, whole, sizeof part) == 0);
+    CHECK(cn_robot_set_joints(w, r, js, qs, 2) == 0);
+  }
   int bad_j[1] = {9};
   CHECK(cn_robot_set_joints(w, r, bad_j, qs, 1) == CN_E_HANDLE);
 
