@@ -77,8 +77,15 @@ struct Sweep {
   std::vector<btTransform> lp;               // link poses at the time asked last
   std::vector<Mover> movers;
   std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
-  std::deque<std::vector<Piece>> body_pieces;            // pieces of moving bodies
-  std::deque<std::vector<int>> body_chains;              // chains of attached bodies
+  std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
+  std::vector<std::unique_ptr<std::vector<int>>> body_chains;    // chains of attached bodies
+  // the movers' candidates, side by side (Mover::c0, nc): the bodies, their broadphase boxes,
+  // whether a pair is done (reported, or left out as a start contact) and the time before
+  // which it cannot be reached
+  std::vector<const btCollisionObject *> cands;
+  std::vector<btVector3> cand_lo, cand_hi;
+  std::vector<char> done;
+  std::vector<double> clear_until;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
   std::vector<int> moving_ids;                           // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
@@ -152,11 +159,12 @@ struct Sweep {
   // A moving body (attached object or a body swept on its own): its pieces kept here.
   void add_body_mover(int obj, const btCollisionObject *co, int frame_link, const btTransform &rel,
                       std::vector<int> chain) {
-    body_chains.push_back(std::move(chain));
-    body_pieces.emplace_back();
+    body_chains.push_back(std::make_unique<std::vector<int>>(std::move(chain)));
+    body_pieces.push_back(std::make_unique<std::vector<Piece>>());
     const btCollisionShape *s = co->getCollisionShape();
-    collect_pieces(s, btTransform::getIdentity(), body_pieces.back(), owned);
-    add_mover(obj, -1, co, frame_link, rel, &body_chains.back(), body_pieces.back(), shape_radius(s));
+    collect_pieces(s, btTransform::getIdentity(), *body_pieces.back(), owned);
+    add_mover(obj, -1, co, frame_link, rel, body_chains.back().get(), *body_pieces.back(),
+              shape_radius(s));
   }
 
   // Rigidly attached bodies of PARENT (and theirs), hanging from FRAME_LINK at REL.
@@ -268,7 +276,7 @@ struct Sweep {
     // the bodies in the union of the move boxes, their boxes side by side for the tests below
     struct Found : btBroadphaseAabbCallback {
       const Sweep *s;
-      std::vector<const btBroadphaseProxy *> out;
+      std::vector<const btCollisionObject *> out;
       std::vector<btVector3> lo, hi;
       std::vector<std::array<int, 4>> id;  // object, link, filter group, filter mask
       bool process(const btBroadphaseProxy *bp) override {
@@ -277,7 +285,7 @@ struct Sweep {
         decode_rb(co, ob, lb);
         if ((s->robot && ob == s->robot->id) || s->moving(ob) || s->ignored_by_all(ob, lb))
           return true;
-        out.push_back(bp);
+        out.push_back(co);
         lo.push_back(bp->m_aabbMin);
         hi.push_back(bp->m_aabbMax);
         id.push_back({ob, lb, bp->m_collisionFilterGroup, bp->m_collisionFilterMask});
@@ -291,11 +299,15 @@ struct Sweep {
     found.id.reserve(256);
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
     size_t nf = found.out.size();
+    cands.clear();
+    cand_lo.clear();
+    cand_hi.clear();
+    cands.reserve(4 * nf);
+    cand_lo.reserve(4 * nf);
+    cand_hi.reserve(4 * nf);
     for (size_t i = 0; i < nm; ++i) {
       Mover &m = movers[i];
-      m.candidates.clear();
-      m.cand_lo.clear();
-      m.cand_hi.clear();
+      m.c0 = (int)cands.size();
       const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
       int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
       const btVector3 &ml = mlo[i], &mh = mhi[i];
@@ -304,13 +316,14 @@ struct Sweep {
         const std::array<int, 4> &id = found.id[f];
         if (!(id[2] & mask) || !(group & id[3])) continue;
         if (ignored(m, id[0], id[1])) continue;
-        m.candidates.push_back(static_cast<const btCollisionObject *>(found.out[f]->m_clientObject));
-        m.cand_lo.push_back(found.lo[f]);
-        m.cand_hi.push_back(found.hi[f]);
+        cands.push_back(found.out[f]);
+        cand_lo.push_back(found.lo[f]);
+        cand_hi.push_back(found.hi[f]);
       }
-      m.done.assign(m.candidates.size(), 0);
-      m.clear_until.assign(m.candidates.size(), 0);
+      m.nc = (int)cands.size() - m.c0;
     }
+    done.assign(cands.size(), 0);
+    clear_until.assign(cands.size(), 0);
   }
 
   bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
@@ -476,10 +489,10 @@ struct Sweep {
     slot_hi.reserve(expect);
     pool.resize(levels + 2);
     for (size_t i = 0; i < movers.size(); ++i) {
-      if (movers[i].candidates.empty()) continue;
+      if (movers[i].nc == 0) continue;
       std::vector<int> &all = pool[0];
       all.clear();
-      for (size_t c = 0; c < movers[i].candidates.size(); ++c) all.push_back((int)c);
+      for (int c = movers[i].c0; c < movers[i].c0 + movers[i].nc; ++c) all.push_back(c);
       descend(i, 0, n, 0);
     }
   }
@@ -506,7 +519,7 @@ struct Sweep {
     if (robot && any_anchor) fk(t, base);
     for (size_t i = 0; i < nm; ++i) {
       const Mover &m = movers[i];
-      if (m.candidates.empty()) continue;
+      if (m.nc == 0) continue;
       size_t at = sl * nm + i;
       slot_pose[at] = m.anchor < 0 ? base * m.rel_anchor : lp[m.anchor] * m.rel_anchor;
       m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
@@ -533,8 +546,8 @@ struct Sweep {
     std::vector<int> &keep = pool[depth + 1];
     keep.clear();
     for (int c : pool[depth]) {
-      if (m.done[c] || tb <= m.clear_until[c]) continue;
-      if (TestAabbAgainstAabb2(lo, hi, m.cand_lo[c], m.cand_hi[c])) keep.push_back(c);
+      if (done[c] || tb <= clear_until[c]) continue;
+      if (TestAabbAgainstAabb2(lo, hi, cand_lo[c], cand_hi[c])) keep.push_back(c);
     }
     if (keep.empty()) return;
     if (kb - ka == 8) {
@@ -542,10 +555,10 @@ struct Sweep {
       // (everything before ta is clear already: the pair is clear up to tb)
       keep.erase(std::remove_if(keep.begin(), keep.end(),
                                 [&](int c) {
-                                  if (ta < m.clear_until[c] ||
-                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, m.candidates[c]))
+                                  if (ta < clear_until[c] ||
+                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, cands[c]))
                                     return false;
-                                  m.clear_until[c] = tb;
+                                  clear_until[c] = tb;
                                   return true;
                                 }),
                  keep.end());
@@ -558,35 +571,35 @@ struct Sweep {
       return;
     }
     for (int c : keep) {
-      if (m.done[c] || tb <= m.clear_until[c]) continue;
-      const btCollisionObject *other = m.candidates[c];
+      if (done[c] || tb <= clear_until[c]) continue;
+      const btCollisionObject *other = cands[c];
       double known = NAN;
       // conservative advancement: no point of the mover moves faster than B, so a pair
       // apart by d at ta stays apart until ta + d / B
-      if (ta >= m.clear_until[c]) {
+      if (ta >= clear_until[c]) {
         double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
         btVector3 at_point;
         double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
         if (ka == 0 && skip_start && d <= tol) {
-          m.done[c] = 1;
+          done[c] = 1;
           continue;
         }
         if (d <= 0) {  // touching at ta
-          m.done[c] = 1;
+          done[c] = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
           hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
           continue;
         }
-        m.clear_until[c] = ta + d / m.B;
-        if (tb <= m.clear_until[c]) continue;
+        clear_until[c] = ta + d / m.B;
+        if (tb <= clear_until[c]) continue;
         known = d;
       }
       btVector3 point;
       double db = NAN;
       double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
       if (t < 0) continue;
-      m.done[c] = 1;
+      done[c] = 1;
       int ob, lb;
       decode_rb(other, ob, lb);
       hits.push_back({m.obj, m.link, ob, lb, t, point});

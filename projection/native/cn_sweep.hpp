@@ -5,7 +5,6 @@
 
 #include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
 #include <algorithm>
-#include <deque>
 
 namespace cn {
 namespace sweep {
@@ -101,10 +100,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
-  std::vector<const btCollisionObject *> candidates;
-  std::vector<btVector3> cand_lo, cand_hi;  // their broadphase boxes
-  std::vector<char> done;         // per candidate: reported, or left out (start contact)
-  std::vector<double> clear_until;  // per candidate: time before which it cannot be reached
+  int c0 = 0, nc = 0;              // its candidates: entries c0 .. c0 + nc - 1 of the sweep's
 };
 
 struct Hit {
