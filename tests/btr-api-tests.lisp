@@ -173,3 +173,30 @@
     (is (= (hash-table-count (cl-urdf:links robot)) (hash-table-count (cl-urdf:links again))))
     (is (= (hash-table-count (cl-urdf:joints robot)) (hash-table-count (cl-urdf:joints again))))
     (is (equal (cl-urdf:name (cl-urdf:root-link robot)) (cl-urdf:name (cl-urdf:root-link again))))))
+
+(test call-without-collisions-keeps-an-object-out-of-the-physics
+  ;; a static block stuck into the side of the cup: simulated normally it pushes the cup away;
+  ;; with the block out of the physics the cup stays where it is, and afterwards the block
+  ;; collides again
+  (flet ((world-with-pusher ()
+           (let ((w (small-world)))
+             (btr:add-object w :box 'pusher '((0.05 0 0.79) (0 0 0 1)) :size '(0.06 0.06 0.1))
+             w)))
+    (let* ((w (world-with-pusher)) (cup (btr:object w 'cup)) (x0 (x-of cup)))
+      (btr:simulate w 0.5)
+      (is (> (abs (- (x-of cup) x0)) 0.005d0)))
+    (let* ((w (world-with-pusher)) (cup (btr:object w 'cup)) (pusher (btr:object w 'pusher))
+           (x0 (x-of cup)))
+      (multiple-value-bind (group mask) (cram-native:object-collision-filter (btr:world-handle w)
+                                                                        (btr:object-handle pusher))
+        (is (eq :done (btr:call-without-collisions
+                       pusher (lambda ()
+                                (btr:simulate w 0.5)
+                                (is (not (btr:objects-in-contact-p w cup pusher)))
+                                :done))))
+        (is (< (abs (- (x-of cup) x0)) 0.001d0))
+        (is (equal (list group mask)
+                   (multiple-value-list (cram-native:object-collision-filter
+                                         (btr:world-handle w) (btr:object-handle pusher)))))
+        (is (btr:objects-in-contact-p w cup pusher)))))
+  (signals btr:btr-error (btr:call-without-collisions 'no-such-object (lambda () t))))

@@ -55,3 +55,21 @@
                (setf cram-viewer::*max-report-bytes* limit))))
       (cram-viewer:stop-viewer)
       (setf cram-viewer::*reports* '()))))
+
+(test recorded-costmaps-are-bounded
+  ;; every overlay that notes a location designator's costmap counts against
+  ;; *MAX-RECORDED-COSTMAPS*: beyond it the oldest overlays lose their costmap, not their samples
+  (let ((cram-viewer::*overlays-with-costmaps* '())
+        (cram-viewer::*max-recorded-costmaps* 4)
+        (overlays (loop for i below 7
+                        collect (let ((h (make-hash-table :test 'equal)))
+                                  (setf (gethash "costmap" h) (list :costmap i)
+                                        (gethash "samples" h) (list i))
+                                  h))))
+    (sb-thread:with-mutex (cram-viewer::*recorder-lock*)
+      (mapc #'cram-viewer::keep-overlay-costmap overlays))
+    (is (= 4 (length cram-viewer::*overlays-with-costmaps*)))
+    (is (equal '(nil nil nil) (mapcar (lambda (o) (gethash "costmap" o)) (subseq overlays 0 3))))
+    (is (equal '((:costmap 3) (:costmap 4) (:costmap 5) (:costmap 6))
+               (mapcar (lambda (o) (gethash "costmap" o)) (subseq overlays 3))))
+    (is (equal '((0) (1) (2)) (mapcar (lambda (o) (gethash "samples" o)) (subseq overlays 0 3))))))

@@ -293,6 +293,20 @@ sub-mesh of a mesh file (true) and one hull over the whole mesh (NIL)."))
       (when color
         (native:set-object-color w h (color-rgba color) -1)))))
 
+(defun call-without-collisions (object thunk)
+  "Call THUNK while OBJECT (all its links) collides with nothing in its world's physics (its
+collision mask cleared), then restore its collision filter. Contact queries made meanwhile
+see no contact of OBJECT either."
+  (unless (typep object 'object)
+    (btr-fail "CALL-WITHOUT-COLLISIONS: ~s is not an object of a reasoning world" object))
+  (let ((w (whandle object)) (h (object-handle object)))
+    (multiple-value-bind (group mask) (with-live-object (object 'call-without-collisions)
+                                        (native:object-collision-filter w h))
+      (native:set-object-collision-filter w h group 0)
+      (unwind-protect (funcall thunk)
+        (when (native:world-alive-p w)
+          (ignore-errors (native:set-object-collision-filter w h group mask)))))))
+
 (defun color-rgba (color)
   "COLOR (r g b) or (r g b a), components in [0, 1], as a list of four doubles."
   (unless (and (listp color) (<= 3 (length color) 4) (every #'realp color))

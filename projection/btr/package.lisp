@@ -25,7 +25,7 @@
    ;; objects
    #:item #:robot-object #:rigid-body #:rigid-bodies #:name #:pose #:object-pose
    #:item-type #:item-types #:object-type #:aabb #:bounding-box #:object-color
-   #:collision-group-bits #:*mesh-files* #:*all-meshes-as-compound* #:add-objects-to-mesh-list
+   #:collision-group-bits #:call-without-collisions #:*mesh-files* #:*all-meshes-as-compound* #:add-objects-to-mesh-list
    #:register-ros-package #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
    ;; the costmap visualization
    #:add-costmap-function-object #:add-costmap-sample-object #:add-vis-axis-object

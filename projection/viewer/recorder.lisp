@@ -81,7 +81,8 @@ but the last few).")
 
 (defun clear-runs ()
   "Forget every recorded run."
-  (sb-thread:with-mutex (*recorder-lock*) (setf *runs* '() *pending-overlays* '()))
+  (sb-thread:with-mutex (*recorder-lock*)
+    (setf *runs* '() *pending-overlays* '() *overlays-with-costmaps* '()))
   t)
 
 (defun run-label (run)
@@ -134,6 +135,26 @@ that recording many long runs stays bounded."
           do (dolist (overlay (step-overlays step))
                (when (and (hash-table-p overlay) (gethash "costmap" overlay))
                  (setf (gethash "costmap" overlay) nil))))))
+
+(defvar *max-recorded-costmaps* 24
+  "How many overlays keep their location designator's costmap, all runs and pending overlays
+together: when another costmap is noted, the oldest one kept is dropped (its samples stay). A
+costmap is a grid of doubles (0.7 MB in the kitchen) and a household run samples hundreds of
+one-off designators while it checks base poses, so keeping every costmap of a run filled the
+heap.")
+
+(defvar *overlays-with-costmaps* '()
+  "The overlays that still hold a costmap, newest first (at most *MAX-RECORDED-COSTMAPS*).")
+
+(defun keep-overlay-costmap (overlay)
+  "Note that OVERLAY holds a costmap; drop the costmaps of the oldest overlays beyond
+*MAX-RECORDED-COSTMAPS*. Call with *RECORDER-LOCK* held."
+  (push overlay *overlays-with-costmaps*)
+  (let ((beyond (nthcdr (max 0 *max-recorded-costmaps*) *overlays-with-costmaps*)))
+    (when beyond
+      (dolist (old beyond) (setf (gethash "costmap" old) nil))
+      (setf *overlays-with-costmaps*
+            (subseq *overlays-with-costmaps* 0 (max 0 *max-recorded-costmaps*))))))
 
 (defun record-motion (label &optional (world btr:*current-bullet-world*))
   "Record the state of WORLD after the motion LABEL as a step of the current run (see
@@ -206,7 +227,9 @@ costmap is kept (with the costmap) for the replay's overlays. Always :UNKNOWN."
                              "costmap" (and (typep costmap 'costmap:location-costmap) costmap)
                              "samples" '()))
           (setf (gethash designator *noted-costmaps*) overlay)
-          (note-overlay overlay)))
+          (note-overlay overlay)
+          (when (gethash "costmap" overlay)
+            (sb-thread:with-mutex (*recorder-lock*) (keep-overlay-costmap overlay)))))
       (sb-thread:with-mutex (*recorder-lock*)
         (when (< (length (gethash "samples" overlay)) 500)
           (push (pose-stamped-list solution) (gethash "samples" overlay))))))

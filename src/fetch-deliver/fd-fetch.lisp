@@ -11,11 +11,12 @@
 
 (defun fetching-robot-location (object arms)
   "CRAM's default base location of a fetch: where the robot reaches OBJECT (with the first of
-ARMS) and sees it."
+ARMS) and sees it (REACHABLE-FOR and VISIBLE-FOR: a line of sight to it past what stands
+around it)."
   (let ((?robot (robot-name)) (?object object) (?arm (first arms)))
     (if ?arm
-        (desig:a location (reachable-for ?robot) (arm ?arm) (object ?object))
-        (desig:a location (reachable-for ?robot) (object ?object)))))
+        (desig:a location (reachable-for ?robot) (visible-for ?robot) (arm ?arm) (object ?object))
+        (desig:a location (reachable-for ?robot) (visible-for ?robot) (object ?object)))))
 
 (defun fetch (&key object arms grasps robot-location look-location &allow-other-keys)
   "Fetch the perceived OBJECT: drive to ROBOT-LOCATION, turn towards LOOK-LOCATION, perceive

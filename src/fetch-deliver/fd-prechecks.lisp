@@ -73,7 +73,9 @@ OBJECT-UNREACHABLE when none does."
 (defun check-placing-collisions (object arm target)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
 which ARM puts OBJECT down free of collisions (the designator of that solution; samples beyond
-*PLACING-REACH* of the base are not tried); signals
+*PLACING-REACH* of the base are not tried): as CRAM's check, the hand reaches the approach,
+the put-down and the retreat poses (so the hand can also come back for the object the way it
+left); signals
 OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pose."
   (let ((current target) (?object object) (?arm arm))
     (loop repeat *placing-check-samples*
@@ -86,7 +88,8 @@ OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pos
                                                                        (target ?target)))))
                                  (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
                             (pp-plans::with-object-being-placed (object current)
-                              (trajectory-reachable-p arm trajectory '(:putting)))))
+                              (trajectory-reachable-p arm trajectory
+                                                      '(:reaching :putting :retracting)))))
                  (return-from check-placing-collisions current))
                (setf current (desig:next-solution current))))
     (cpl:fail 'common-fail:object-undeliverable

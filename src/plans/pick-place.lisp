@@ -347,7 +347,8 @@ by lowering the object before the simulation; a larger gap is left to the physic
 
 (defun settle-released-object (name)
   "Let the released object NAME come to rest: when it hovers above a surface (up to
-*SETTLING-DROP*), lower it onto it, then simulate *SETTLING-SECONDS* of physics."
+*SETTLING-DROP*), lower it onto it, then simulate *SETTLING-SECONDS* of physics, the robot
+taking no part in it."
   (let* ((world btr:*current-bullet-world*)
          (o (btr:object world name)))
     (when o
@@ -364,7 +365,12 @@ by lowering the object before the simulation; a larger gap is left to the physic
                      (cl-transforms:v- (cl-transforms:origin pose)
                                        (cl-transforms:make-3d-vector 0 0 (- gap 0.0005d0)))
                      (cl-transforms:orientation pose)))))))
-      (btr:simulate world *settling-seconds*))))
+      ;; the robot takes no part: its open gripper still stands around the object (and may
+      ;; touch a neighbour), and as a body that never yields it would throw them about
+      (let ((robot (btr:get-robot-object)))
+        (if robot
+            (btr:call-without-collisions robot (lambda () (btr:simulate world *settling-seconds*)))
+            (btr:simulate world *settling-seconds*))))))
 
 (defun place (&key arm object target target-pose trajectory &allow-other-keys)
   "Put OBJECT held by ARM at TARGET-POSE along TRAJECTORY (:REACHING, :PUTTING, :RETRACTING):
