@@ -73,9 +73,11 @@
 (defconstant +resource-check-interval+ 64
   "Predicate calls between two checks of the heap during a query (a power of two).")
 
-(defvar *prolog-heap-limit* (floor (sb-ext:dynamic-space-size) 3)
+(defvar *prolog-heap-limit* :default
   "The most bytes of dynamic space (the Lisp heap, every thread's data together) that may be in
-use while a Prolog query runs, or NIL for no limit. When a query finds more in use, it collects
+use while a Prolog query runs, NIL for no limit, or :DEFAULT for a third of the dynamic space of
+the running process (taken when a query checks, so a saved core started with a larger
+--dynamic-space-size gets a larger limit). When a query finds more in use, it collects
 garbage; when that does not bring the use under the limit, the query signals
 PROLOG-RESOURCE-ERROR and unwinds, and the memory it held is collected. The default is a third
 of the dynamic space (SBCL's --dynamic-space-size): a collection needs free room to copy the
@@ -106,10 +108,20 @@ unharmed."
        used limit (machine-steps m)))))
 
 (declaim (inline check-resources))
+(defun heap-limit ()
+  "The byte limit *PROLOG-HEAP-LIMIT* stands for, or NIL. Another value is an error naming it."
+  (let ((limit *prolog-heap-limit*))
+    (cond ((null limit) nil)
+          ((eq limit :default) (floor (sb-ext:dynamic-space-size) 3))
+          ((typep limit '(integer 1)) limit)
+          (t (error 'prolog-error
+                    :message (format nil "PROLOG:*PROLOG-HEAP-LIMIT* is ~s, expected a positive ~
+                                          number of bytes, NIL or :DEFAULT." limit))))))
+
 (defun check-resources (m)
   "Signal PROLOG-RESOURCE-ERROR when the heap in use exceeds *PROLOG-HEAP-LIMIT* even after a
 garbage collection."
-  (let ((limit *prolog-heap-limit*))
+  (let ((limit (heap-limit)))
     (when (and limit (> (heap-in-use) (the fixnum limit)))
       (check-resources-slowly m limit))))
 

@@ -82,3 +82,18 @@
            (is (search "API-TEST-FIRST" message))
            (is (search "API-TEST-SIZE" message))))
     (drop-groups 'api-test-first 'api-test-second)))
+
+(test the-default-heap-limit-follows-the-running-dynamic-space
+  (is (eq :default *prolog-heap-limit*))
+  (is (= (floor (sb-ext:dynamic-space-size) 3) (cram-prolog::heap-limit)))
+  (let ((*prolog-heap-limit* 12345678))
+    (is (= 12345678 (cram-prolog::heap-limit))))
+  (let ((*prolog-heap-limit* nil))
+    (is (null (cram-prolog::heap-limit)))
+    (is (not (null (prolog '(member ?x (1 2)))))))
+  (let ((*prolog-heap-limit* "lots"))
+    (let ((e (handler-case (progn (force-ll (prolog '(member ?x (1 2)))) nil)
+               (prolog-error (c) c))))
+      (is (typep e 'prolog-error))
+      (is (search "\"lots\"" (princ-to-string e)))
+      (is (search "*PROLOG-HEAP-LIMIT*" (princ-to-string e))))))
