@@ -79,23 +79,25 @@ then collides with anything but the floor and its attached objects, it is put ba
 NAVIGATION-POSE-UNREACHABLE is signalled. Returns the joint states with the base as
 odom_x_joint / odom_y_joint / odom_z_joint entries."
   (let* ((robot (robot-object))
-         (goal (navigation-goal-in-map pose))
-         (before (btr:pose robot))
-         (state (and *sweep-check* (robot-state-vectors robot))))
+         (goal (navigation-goal-in-map pose)))
     (with-motion ("going")
-      (setf (btr:pose robot) goal)
-      (let ((hits (robot-collisions :robot robot)))
-        (when hits
-          (setf (btr:pose robot) before)
-          (cpl:fail 'common-fail:navigation-pose-unreachable
-                    :description (format nil "Pose ~a is unreachable: the robot would collide with ~{~s~^, ~}."
-                                         (pose-summary goal) hits))))
-      (when state (check-motion-sweep state "going" :base :robot robot))
-      (let ((o (cl-transforms:origin goal)))
-        (append (mapcar (lambda (e) (list (car e) (cdr e))) (btr:joint-states robot))
-                (list (list "odom_x_joint" (cl-transforms:x o))
-                      (list "odom_y_joint" (cl-transforms:y o))
-                      (list "odom_z_joint" (cl-transforms:get-yaw (cl-transforms:orientation goal)))))))))
+      ;; the state before, taken holding the motion lock: a motion of a concurrent branch may
+      ;; come first
+      (let ((before (btr:pose robot))
+            (state (and *sweep-check* (robot-state-vectors robot))))
+        (setf (btr:pose robot) goal)
+        (let ((hits (robot-collisions :robot robot)))
+          (when hits
+            (setf (btr:pose robot) before)
+            (cpl:fail 'common-fail:navigation-pose-unreachable
+                      :description (format nil "Pose ~a is unreachable: the robot would collide with ~{~s~^, ~}."
+                                           (pose-summary goal) hits))))
+        (when state (check-motion-sweep state "going" :base :robot robot))
+        (let ((o (cl-transforms:origin goal)))
+          (append (mapcar (lambda (e) (list (car e) (cdr e))) (btr:joint-states robot))
+                  (list (list "odom_x_joint" (cl-transforms:x o))
+                        (list "odom_y_joint" (cl-transforms:y o))
+                        (list "odom_z_joint" (cl-transforms:get-yaw (cl-transforms:orientation goal))))))))))
 
 (defun pose-summary (pose)
   "A short text of POSE's position and yaw."
