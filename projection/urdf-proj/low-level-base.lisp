@@ -169,8 +169,14 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
 (defun neck-angles-towards (robot joints camera target)
   "Joint values of the neck JOINTS that point the optical axis (z) of the CAMERA frame at the
 map point TARGET, computed from the URDF joint axes and the link poses by turning each joint in
-turn (exact for pan-tilt heads, also for cameras off the joint axes). The joints are left at
-the computed values (possibly outside their limits)."
+turn (exact for pan-tilt heads, also for cameras off the joint axes). The values may lie
+outside the joints' limits; the joints are left at them clamped to the limits, without the
+clamping's warnings (the solver passes through such values; its caller decides what a value
+beyond a limit means)."
+  (handler-bind ((warning #'muffle-warning))
+    (%neck-angles-towards robot joints camera target)))
+
+(defun %neck-angles-towards (robot joints camera target)
   (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0d0)) joints) robot)
   (let ((values (mapcar (lambda (j) (declare (ignore j)) 0d0) joints)))
     (loop repeat 30
