@@ -153,7 +153,8 @@ the same module are serialised."
                                   start it with WITH-PROCESS-MODULES-RUNNING."
                              *running-process-modules*)))
     (sb-thread:with-recursive-lock ((process-module-lock module))
-      (cpl:with-task-tree-node (:process-module name :designator designator)
+      ;; printed only if someone reads the task tree (as PERFORM's nodes)
+      (cpl:with-task-tree-node (:process-module name :designator (lambda () designator))
         (let ((*executing-process-module* name))
           (call-with-process-module-debugger
            (lambda () (funcall (process-module-function module) designator))))))))

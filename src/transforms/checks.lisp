@@ -76,6 +76,14 @@ NaN, an infinity) signals TRANSFORM-INPUT-ERROR naming VALUE and PLACE."
       value
       (input-error value expected place)))
 
+(define-compiler-macro check-type-of (&whole form value type expected place)
+  ;; a quoted TYPE is tested by compiled code, not parsed at run time
+  (if (and (consp type) (eq (first type) 'quote) (symbolp (second type)))
+      (let ((v (gensym "VALUE")))
+        `(let ((,v ,value))
+           (if (typep ,v ,type) ,v (input-error ,v ,expected ,place))))
+      form))
+
 (defmacro with-double-printing (&body body)
   "Run BODY with double floats printed with their d0 exponent marker, as CRAM shows them."
   `(let ((*read-default-float-format* 'single-float))
