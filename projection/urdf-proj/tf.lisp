@@ -83,31 +83,39 @@ inverse(P) * C, translation and quaternion."
   (declare (type (simple-array double-float (*)) a b) (optimize (speed 3) (safety 0)))
   (loop for i of-type fixnum below 7 always (< (abs (- (aref a i) (aref b i))) 1d-10)))
 
+(defun make-link-cache (object)
+  "A cache for PUBLISH-OBJECT-LINKS of the articulated OBJECT: per link index, the last 7
+doubles written (NIL: none yet)."
+  (make-array (length (btr:link-names object)) :initial-element nil))
+
 (defun publish-object-links (transformer object parent-frame stamp &key skip cache)
   "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
 with the map) and every link under its parent link. Links named in the hash table SKIP are
-left out. With CACHE (a hash table link name → the last 7 doubles written), a link whose pose
-relative to its parent is unchanged is not written again. Returns the names of all the links
-of OBJECT in TF."
+left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is
+unchanged is not written again."
   (let* ((names (coerce (btr:link-names object) 'simple-vector))
          (poses (link-poses-vector object))
          (root (cl-urdf:name (cl-urdf:root-link (btr:urdf object))))
          (root-i (position root names :test #'string=))
-         (scratch (make-array 7 :element-type 'double-float))
-         (written '()))
-    (flet ((write-link (parent child relative)
-             (let ((last (and cache (gethash child cache))))
+         (scratch (make-array 7 :element-type 'double-float)))
+    (flet ((write-link (parent child-index relative)
+             (let ((last (and cache (svref cache child-index))))
                (unless (and last (same-pose-vector-p last relative))
-                 (set-tf transformer parent child (pose-vector-transform relative) stamp)
-                 (when cache (setf (gethash child cache) (copy-seq relative)))))
-             (push child written)))
+                 (set-tf transformer parent (svref names child-index)
+                         (pose-vector-transform relative) stamp)
+                 (when cache (setf (svref cache child-index) (copy-seq relative)))))))
       (unless (and skip (gethash root skip))
-        (write-link parent-frame root (subseq poses (* 7 root-i) (* 7 (1+ root-i)))))
+        (write-link parent-frame root-i (subseq poses (* 7 root-i) (* 7 (1+ root-i)))))
       (loop for (p . c) across (link-tree object)
-            for child = (svref names c)
-            unless (and skip (gethash child skip))
-              do (write-link (svref names p) child (relative-pose-into poses p c scratch))))
-    written))
+            unless (and skip (gethash (svref names c) skip))
+              do (write-link (svref names p) c (relative-pose-into poses p c scratch))))
+    object))
+
+(defun link-name-set (object)
+  "The link names of the articulated OBJECT as an EQUAL hash table name → T."
+  (let ((set (make-hash-table :test 'equal)))
+    (dolist (l (btr:link-names object) set)
+      (setf (gethash l set) t))))
 
 (defun environment-signature (object)
   "The joint values and the pose of the articulated OBJECT, as two double vectors."
@@ -148,20 +156,20 @@ whole or not at all. Returns TRANSFORMER."
                                     (cl-transforms:make-identity-transform) stamp)
                             odom)
                      cram-tf:*fixed-frame*))
-         (robot-frames (make-hash-table :test 'equal)))
+         (robot-frames nil))
     (let ((signatures (or *environment-tf-signatures* (make-hash-table :test 'eq))))
       ;; the robot's links under its own key (the robot object): only the changed ones
       (when force (remhash robot signatures))
-      (dolist (l (publish-object-links transformer robot parent stamp
-                                       :cache (or (gethash robot signatures)
-                                                  (setf (gethash robot signatures)
-                                                        (make-hash-table :test 'equal)))))
-        (setf (gethash l robot-frames) t))
+      (publish-object-links transformer robot parent stamp
+                            :cache (or (gethash robot signatures)
+                                       (setf (gethash robot signatures) (make-link-cache robot))))
       (dolist (o (btr:objects world))
         (when (and (typep o 'btr:robot-object) (not (eq o robot)))
           (let ((signature (environment-signature o)))
             (when (or force (not (same-signature-p signature (gethash (btr:name o) signatures))))
-              (publish-object-links transformer o cram-tf:*fixed-frame* stamp :skip robot-frames)
+              (publish-object-links transformer o cram-tf:*fixed-frame* stamp
+                                    :skip (or robot-frames
+                                              (setf robot-frames (link-name-set robot))))
               (setf (gethash (btr:name o) signatures) signature))))))
     transformer))
 
