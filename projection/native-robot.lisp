@@ -16,6 +16,7 @@
 (defcn "cn_robot_link_has_body" :int (w :int) (r :int) (l :int))
 (defcn "cn_robot_set_joints" :int (w :int) (r :int) (j :pointer) (v :pointer) (n :int))
 (defcn "cn_robot_get_joints" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_get_joint" :int (w :int) (r :int) (j :int) (out :pointer))
 (defcn "cn_robot_link_poses" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
 (defcn "cn_robot_set_self_collision" :int (w :int) (r :int) (on :int))
@@ -144,6 +145,13 @@ Mimic joints follow their leader; fixed joints ignore the value."
     (declare (type dvec v))
     (with-vector-pointers ((p v)) (ccall "cn_robot_get_joints" world robot p (length v)))
     v))
+
+(defun robot-joint (world robot joint)
+  "The value of joint number JOINT of ROBOT (mimic joints computed)."
+  (let ((v (make-dvec 1)))
+    (declare (type dvec v) (dynamic-extent v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_get_joint" world robot joint p))
+    (aref v 0)))
 
 (defun robot-link-poses (world robot &optional out)
   "Poses of all links of ROBOT as one DVEC, 7 per link in index order (or into OUT)."

@@ -51,8 +51,7 @@
 
 (defun joint-state (robot joint)
   "The position of JOINT (a name) of ROBOT."
-  (let ((i (joint-index robot joint)))
-    (aref (native:robot-joints (whandle robot) (object-handle robot)) i)))
+  (native:robot-joint (whandle robot) (object-handle robot) (joint-index robot joint)))
 
 (defun (setf joint-state) (value robot joint)
   "Set JOINT of ROBOT to VALUE (links and attached objects follow)."

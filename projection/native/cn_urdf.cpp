@@ -523,6 +523,15 @@ int cn_robot_set_joints(int wh, int r, const int *joints, const double *values, 
   });
 }
 
+int cn_robot_get_joint(int wh, int r, int joint, double *out) {
+  return guard([&] {
+    Object &o = robot_joint(world(wh), r, joint);
+    check_ptr(out, "joint value output");
+    *out = joint_value(*o.model, o.q, joint);
+    return 0;
+  });
+}
+
 int cn_robot_get_joints(int wh, int r, double *out, int cap) {
   return guard([&] {
     Object &o = world(wh).robot(r);

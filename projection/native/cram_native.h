@@ -160,6 +160,7 @@ int cn_robot_link_has_body(int world, int robot, int link);         /* 1 if it c
  * always follow their leader), then forward kinematics and attached objects, once. */
 int cn_robot_set_joints(int world, int robot, const int *joints, const double *values, int n);
 int cn_robot_get_joints(int world, int robot, double *out, int cap);     /* -> num joints */
+int cn_robot_get_joint(int world, int robot, int joint, double *out);  /* one joint's value */
 int cn_robot_link_poses(int world, int robot, double *out7, int cap);    /* -> num links  */
 int cn_robot_link_pose(int world, int robot, int link, double *out7);
 int cn_robot_set_self_collision(int world, int robot, int enabled);      /* default off   */

@@ -65,6 +65,10 @@ int main() {
     CHECK(cn_object_get_pose(w, r, base) == 0 && cn_object_set_pose(w, r, base) == 0);
     CHECK(cn_robot_link_poses(w, r, whole, 3) == 3);
     CHECK(memcmp(part, whole, sizeof part) == 0);
+    double one = -1, all[2];
+    CHECK(cn_robot_get_joint(w, r, 1, &one) == 0 && one == 0.3);
+    CHECK(cn_robot_get_joints(w, r, all, 2) == 2 && all[1] == one);
+    CHECK(cn_robot_get_joint(w, r, 7, &one) == CN_E_HANDLE);
     CHECK(cn_robot_set_joints(w, r, js, qs, 2) == 0);
   }
   int bad_j[1] = {9};
