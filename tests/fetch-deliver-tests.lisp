@@ -170,3 +170,35 @@
   (let ((?location 'kitchen-table))
     (signals desig:designator-error
       (desig:reference (desig:an action (type navigating) (location ?location))))))
+
+(test base-pose-verdicts-are-reused
+  "Within WITH-BASE-POSE-VERDICTS a base pose judged once for the same checks and robot joints
+is not checked again (the same verdict, ACCEPT not called); other checks, a moved torso or no
+verdict table check it again."
+  (setup *island*)
+  (let ((calls 0)
+        (free (pose 0.8 0.7 0 0)))
+    (flet ((judge (what)
+             (fd-plans::judge-base-pose free (lambda (p) (declare (ignore p)) (incf calls) nil)
+                                        what)))
+      (fd-plans::with-base-pose-verdicts ()
+        (is (equal '(nil nil) (multiple-value-list (judge '(:a)))))
+        (is (= 1 calls))
+        (is (equal '(nil nil) (multiple-value-list (judge '(:a)))))
+        (is (= 1 calls) "the second judgement of the same pose is the cached one")
+        (judge '(:b))
+        (is (= 2 calls) "other checks are judged anew")
+        (let ((robot (btr:get-robot-object)))
+          (setf (btr:joint-state robot "torso_lift_joint") 0.2d0)
+          (judge '(:a))
+          (is (= 3 calls) "a moved torso is judged anew")))
+      (judge '(:a))
+      (is (= 4 calls) "without a verdict table every judgement checks"))
+    ;; a pose in collision is rejected with what it touches, ACCEPT not asked
+    (fd-plans::with-base-pose-verdicts ()
+      (multiple-value-bind (accepted hits)
+          (fd-plans::judge-base-pose (apply #'pose *robot-in-sink*)
+                                     (lambda (p) (declare (ignore p)) (incf calls) t) '(:c))
+        (is (null accepted))
+        (is (consp hits))
+        (is (= 4 calls))))))

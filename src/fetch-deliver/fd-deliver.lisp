@@ -62,6 +62,7 @@ the target sample can be found (a designator error). Returns the object designat
            (cpl:fail 'common-fail:delivering-failed
                      :description (format nil "Delivering ~a: a designator could not be resolved: ~a"
                                           (object-text ?object) e))))
+      (with-base-pose-verdicts ()
       (cpl:with-retry-counters ((outer-target-retries 4)
                                 (unreachable-target-retries *unreachable-target-retries*))
         (cpl:with-failure-handling
@@ -136,7 +137,7 @@ the target sample can be found (a designator error). Returns the object designat
                       (cpl:fail 'common-fail:object-unreachable
                                 :description (format nil "Placing ~a at ~a failed: ~a"
                                                      (object-text ?object) ?target e))))
-                  (desig:current-desig ?object)))))))))))
+                  (desig:current-desig ?object))))))))))))
 
 (defun drop-at-sink ()
   "CRAM's fallback after a failed delivery: drive to the map origin facing -y and put the held

@@ -34,6 +34,7 @@ Returns the object designator; FETCHING-FAILED when all are used up."
            (cpl:fail 'common-fail:fetching-failed
                      :description (format nil "Fetching ~a: a designator could not be resolved: ~a"
                                           (object-text ?object) e))))
+      (with-base-pose-verdicts ()
       (cpl:with-retry-counters ((relocation-retries 50))
         (cpl:with-failure-handling
             (((or common-fail:navigation-goal-in-collision
@@ -67,7 +68,7 @@ Returns the object designator; FETCHING-FAILED when all are used up."
                              :description "A misgrasp happened and retrying did not help.")))
               (let ((?perceived (exe:perform (desig:an action (type perceiving) (object ?object)))))
                 (pick-up-with-alternatives ?perceived all-arms all-grasps)
-                (desig:current-desig ?object)))))))))
+                (desig:current-desig ?object))))))))))
 
 (defun pick-up-with-alternatives (object all-arms all-grasps)
   "Pick up OBJECT with the arms of ALL-ARMS in turn (1 retry) and for each the grasps of

@@ -16,18 +16,67 @@ holds. Checked in the belief state; the robot is put back where it was."
                 (urdf-proj::robot-collisions :robot robot))
       (setf (btr:pose robot) before))))
 
-(defun check-navigating-collisions (location &key (accept (constantly t)))
+(defvar *base-pose-verdicts* nil
+  "NIL, or an EQUAL hash table of the base pose verdicts of the navigation pre-checks of one
+fetch or delivery (WITH-BASE-POSE-VERDICTS): (pose robot-joints what-is-checked) -> whether the
+pose was accepted. Its retry levels walk overlapping runs of the same solutions (a relocation
+takes the next solution, the pre-check then tries up to *NAVIGATION-CHECK-SAMPLES* from there);
+a pose already judged in the same state is not checked again.")
+
+(defvar *base-pose-verdicts-lock* (sb-thread:make-mutex :name "base pose verdicts"))
+
+(defmacro with-base-pose-verdicts (() &body body)
+  "Run BODY with a fresh *BASE-POSE-VERDICTS* table (kept when one is already bound)."
+  `(let ((*base-pose-verdicts* (or *base-pose-verdicts* (make-hash-table :test 'equal))))
+     ,@body))
+
+(defun rounded (x &optional (unit 1d-4))
+  (round x unit))
+
+(defun base-pose-key (pose)
+  "The map POSE as integers (0.1 mm, 1e-4 rad of yaw)."
+  (let* ((p (pp-plans:pose-in-map pose)) (o (cl-transforms:origin p)))
+    (list (rounded (cl-transforms:x o)) (rounded (cl-transforms:y o))
+          (rounded (cl-transforms:get-yaw (cl-transforms:orientation p))))))
+
+(defun robot-joints-key ()
+  "The robot's joint positions as integers (1e-4), for the verdict cache: a verdict holds only
+for the arms, torso and grippers it was found with."
+  (mapcar (lambda (joint) (rounded (cdr joint))) (btr:joint-states (btr:get-robot-object))))
+
+(defun judge-base-pose (pose accept what)
+  "(values accepted hits) for the robot standing at POSE: HITS, what it touches there, and
+whether it is free there and ACCEPT (a function of the pose) accepts it. A pose judged before
+within *BASE-POSE-VERDICTS* for the same robot joints and WHAT (a list naming what ACCEPT
+checks) gives the same verdict without a check."
+  (let ((key (and *base-pose-verdicts* (list* (base-pose-key pose) (robot-joints-key) what))))
+    (multiple-value-bind (verdict found)
+        (if key
+            (sb-thread:with-mutex (*base-pose-verdicts-lock*) (gethash key *base-pose-verdicts*))
+            (values nil nil))
+      (if found
+          (values (car verdict) (cdr verdict))
+          (let* ((hits (base-pose-collisions pose))
+                 (accepted (and (null hits) (funcall accept pose) t)))
+            (when key
+              (sb-thread:with-mutex (*base-pose-verdicts-lock*)
+                (setf (gethash key *base-pose-verdicts*) (cons accepted hits))))
+            (values accepted hits))))))
+
+(defun check-navigating-collisions (location &key (accept (constantly t)) what)
   "The projection pre-check of navigating: the first of up to *NAVIGATION-CHECK-SAMPLES*
 solutions of LOCATION (a location designator) at which the robot is free of collisions and
 that ACCEPT (a function of the base pose) accepts: the designator of that solution, equated
-with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none."
+with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none. WHAT names what
+ACCEPT checks (a list, compared with EQUAL): verdicts are reused within
+WITH-BASE-POSE-VERDICTS for the same WHAT."
   (let ((current location))
     (loop repeat *navigation-check-samples*
           while current
           do (let ((pose (handler-case (desig:reference current)
                            (desig:designator-error () (return)))))
-               (let ((hits (base-pose-collisions pose)))
-                 (when (and (null hits) (funcall accept pose))
+               (multiple-value-bind (accepted hits) (judge-base-pose pose accept what)
+                 (when accepted
                    (return-from check-navigating-collisions current))
                  (when hits
                    (log-fd :warn 'navigate "Navigation goal ~a collides with ~{~s~^, ~}; trying ~
@@ -36,6 +85,15 @@ with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none."
     (cpl:fail 'common-fail:navigation-goal-in-collision
               :description (format nil "No solution of ~a is free of collisions for the robot."
                                    location))))
+
+(defun object-key (object)
+  "For the verdict cache: OBJECT's (an object designator or NIL) name and map pose (0.1 mm)."
+  (let* ((name (and object (designator-object-name object)))
+         (o (and name (btr:object btr:*current-bullet-world* name))))
+    (cond (o (let ((p (cl-transforms:origin (btr:pose o))))
+               (list name (rounded (cl-transforms:x p)) (rounded (cl-transforms:y p))
+                     (rounded (cl-transforms:z p)))))
+          (object (list object)))))
 
 (defun navigate (&key location (park-arms t) see grasp place &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
@@ -48,7 +106,10 @@ obstacles."
     (exe:perform (desig:an action (type parking-arms))))
   (let ((?location (desig:current-desig
                     (check-navigating-collisions
-                     location :accept (lambda (pose)
+                     location :what (list (object-key see) (object-key grasp)
+                                          (and place (list (object-key (first place)) (second place)
+                                                           (desig:current-desig (third place)))))
+                              :accept (lambda (pose)
                                         (and (or (null see) (object-visible-from-p see pose))
                                              (or (null grasp)
                                                  (object-graspable-from-p grasp pose))
