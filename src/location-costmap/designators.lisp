@@ -57,6 +57,18 @@ tested by moving it there and back."
           (push (cons robot-name world) (gethash designator *scratch-worlds*))
           world))))
 
+(defun register-ring-costs (costmap target outer inner padding gauss-share names)
+  "Register on COSTMAP the costs of a base pose near TARGET: within OUTER of it, in free space
+\(PADDING), not nearer than INNER, and a gaussian around it of OUTER × GAUSS-SHARE. NAMES: the
+names of the range, minimal range and gaussian cost functions."
+  (destructuring-bind (range-name minimal-name gauss-name) names
+    (register-cost-function costmap (make-range-cost-function target outer) range-name 0)
+    (add-occupancy costmap padding)
+    (register-cost-function costmap (make-range-cost-function target inner :invert t) minimal-name 2)
+    (register-cost-function costmap (make-gauss-cost-function
+                                     target (diagonal-covariance (* outer gauss-share)))
+                            gauss-name 3)))
+
 (defun visible-for-costmap (designator robot)
   "The costmap of the base poses from which the robot ROBOT sees the target of DESIGNATOR:
 free space (COSTMAP-PADDING) within VISIBILITY-COSTMAP-SIZE of the target, a gaussian around
@@ -69,13 +81,8 @@ it, and a line of sight from the camera height; the base faces the target."
                (padding (metadata 'costmap-padding))
                (samples (metadata 'orientation-samples 1))
                (step (metadata 'orientation-sample-step (/ pi 18))))
-          (register-cost-function costmap (make-range-cost-function target radius) 'visibility-range 0)
-          (add-occupancy costmap padding)
-          (register-cost-function costmap (make-range-cost-function target padding :invert t)
-                                  'visibility-minimal-range 2)
-          (register-cost-function costmap (make-gauss-cost-function
-                                           target (diagonal-covariance (* radius *visibility-gauss-share*)))
-                                  'visibility-gauss 3)
+          (register-ring-costs costmap target radius padding padding *visibility-gauss-share*
+                               '(visibility-range visibility-minimal-range visibility-gauss))
           (register-cost-function costmap
                                   (make-line-of-sight-cost-function
                                    target (robot-camera-height robot)
@@ -106,13 +113,8 @@ turned so that the shoulder of the ARM (when given) faces it."
                (arm (desig:desig-prop-value designator :arm))
                (lateral (if arm (arm-lateral-offset robot arm) 0d0)))
           (multiple-value-bind (tx ty) (point-xy target "REACHABLE-FOR target")
-            (register-cost-function costmap (make-range-cost-function target reach) 'reach-range 0)
-            (add-occupancy costmap padding)
-            (register-cost-function costmap (make-range-cost-function target minimal :invert t)
-                                    'reach-minimal-range 2)
-            (register-cost-function costmap (make-gauss-cost-function
-                                             target (diagonal-covariance (* reach *reach-gauss-share*)))
-                                    'reach-gauss 3)
+            (register-ring-costs costmap target reach minimal padding *reach-gauss-share*
+                                 '(reach-range reach-minimal-range reach-gauss))
             (register-orientation-generator
              costmap
              (make-orientation-generator

@@ -147,23 +147,24 @@ the convention of URDF-NAME->ROBOT-NAME)."
   (mapcar (lambda (bindings) (cut:var-value '?arm bindings))
           (cut:force-ll (prolog `(arm ,robot ?arm)))))
 
+(defun arm-fact-value (predicate robot arm)
+  "The value of the (PREDICATE ROBOT ARM ?value) fact; ROBOT-INTERFACE-ERROR naming PREDICATE,
+ROBOT, ARM and the robot's arms when there is none."
+  (multiple-value-bind (value found) (first-solution-value '?value `(,predicate ,robot ,arm ?value))
+    (unless found
+      (robot-interface-error "Robot ~s has no ~a fact for the arm ~s; its arms are ~s."
+                             robot predicate arm (robot-arms robot)))
+    value))
+
 (defun get-arm-joints (robot arm)
   "The joint names of ARM of ROBOT in kinematic order, from the ARM-JOINTS facts.
 Signals ROBOT-INTERFACE-ERROR when the robot has no such arm."
-  (multiple-value-bind (joints found) (first-solution-value '?joints `(arm-joints ,robot ,arm ?joints))
-    (unless found
-      (robot-interface-error "Robot ~s has no ARM-JOINTS fact for the arm ~s; its arms are ~s."
-                             robot arm (robot-arms robot)))
-    joints))
+  (arm-fact-value 'arm-joints robot arm))
 
 (defun get-arm-links (robot arm)
   "The link names of ARM of ROBOT in kinematic order, from the ARM-LINKS facts.
 Signals ROBOT-INTERFACE-ERROR when the robot has no such arm."
-  (multiple-value-bind (links found) (first-solution-value '?links `(arm-links ,robot ,arm ?links))
-    (unless found
-      (robot-interface-error "Robot ~s has no ARM-LINKS fact for the arm ~s; its arms are ~s."
-                             robot arm (robot-arms robot)))
-    links))
+  (arm-fact-value 'arm-links robot arm))
 
 (defun get-robot-joint-states (robot joints-type joints-id state-name)
   "The named configuration STATE-NAME (e.g. :PARK) of the JOINTS-TYPE (:ARM, :NECK) part
