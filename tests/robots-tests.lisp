@@ -30,8 +30,10 @@
   (not (null (prolog:prolog query))))
 
 (defmacro with-robot ((name) &body body)
-  "Run BODY with ROB-INT:*ROBOT-NAME* bound to NAME."
-  `(let ((rob-int:*robot-name* ,name))
+  "Run BODY with ROB-INT:*ROBOT-NAME* bound to NAME and no robot taken from a belief state (a
+suite run before may have left one loaded)."
+  `(let ((rob-int:*robot-name* ,name)
+         (rob-int::*loaded-robot-name-function* nil))
      ,@body))
 
 (defparameter *pepper* 'pepper-descr:pepper)
