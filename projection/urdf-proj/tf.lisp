@@ -90,8 +90,8 @@ doubles written (NIL: none yet)."
 
 (defun publish-object-links (transformer object parent-frame stamp &key skip cache)
   "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
-with the map) and every link under its parent link. Links named in the hash table SKIP are
-left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is
+with the map) and every link under its parent link. Links of the same name as a link of the
+articulated object SKIP are left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is
 unchanged is not written again."
   (let* ((names (coerce (btr:link-names object) 'simple-vector))
          (poses (link-poses-vector object))
@@ -104,18 +104,13 @@ unchanged is not written again."
                  (set-tf transformer parent (svref names child-index)
                          (pose-vector-transform relative) stamp)
                  (when cache (setf (svref cache child-index) (copy-seq relative)))))))
-      (unless (and skip (gethash root skip))
+      (unless (and skip (btr:link-exists-p skip root))
         (write-link parent-frame root-i (subseq poses (* 7 root-i) (* 7 (1+ root-i)))))
       (loop for (p . c) across (link-tree object)
-            unless (and skip (gethash (svref names c) skip))
+            unless (and skip (btr:link-exists-p skip (svref names c)))
               do (write-link (svref names p) c (relative-pose-into poses p c scratch))))
     object))
 
-(defun link-name-set (object)
-  "The link names of the articulated OBJECT as an EQUAL hash table name → T."
-  (let ((set (make-hash-table :test 'equal)))
-    (dolist (l (btr:link-names object) set)
-      (setf (gethash l set) t))))
 
 (defun environment-signature (object)
   "The joint values and the pose of the articulated OBJECT, as two double vectors."
@@ -155,8 +150,7 @@ whole or not at all. Returns TRANSFORMER."
                      (progn (set-tf transformer cram-tf:*fixed-frame* odom
                                     (cl-transforms:make-identity-transform) stamp)
                             odom)
-                     cram-tf:*fixed-frame*))
-         (robot-frames nil))
+                     cram-tf:*fixed-frame*)))
     (let ((signatures (or *environment-tf-signatures* (make-hash-table :test 'eq))))
       ;; the robot's links under its own key (the robot object): only the changed ones
       (when force (remhash robot signatures))
@@ -167,9 +161,7 @@ whole or not at all. Returns TRANSFORMER."
         (when (and (typep o 'btr:robot-object) (not (eq o robot)))
           (let ((signature (environment-signature o)))
             (when (or force (not (same-signature-p signature (gethash (btr:name o) signatures))))
-              (publish-object-links transformer o cram-tf:*fixed-frame* stamp
-                                    :skip (or robot-frames
-                                              (setf robot-frames (link-name-set robot))))
+              (publish-object-links transformer o cram-tf:*fixed-frame* stamp :skip robot)
               (setf (gethash (btr:name o) signatures) signature))))))
     transformer))
 

@@ -224,11 +224,10 @@ TASK's own thread."
                    (copy-list (task-group-tasks group)))))
       (mapc #'evaporate-task tasks)
       (dolist (task tasks)
-        (progn
-          (wait-for-release task)
-          (unless (task-done-p task)
-            (setf (task-status task) :evaporated)
-            (note-task-status task)))))))
+        (wait-for-release task)
+        (unless (task-done-p task)
+          (setf (task-status task) :evaporated)
+          (note-task-status task))))))
 
 (defun group-tasks-in-order (group)
   (sort (copy-list (task-group-tasks group)) #'< :key #'task-index))
