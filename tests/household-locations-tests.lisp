@@ -115,6 +115,32 @@
                    (samples (location `(:on ,table) '(:orientation :support-aligned)) 10))
             "(on table) (orientation support-aligned): along the table's axes")))))
 
+;; The designator's own solutions, as a plan gets them (every generator, in order), not only
+;; its costmap's samples: (side ...) is a side of the surface, not the era's arm.
+(test side-and-range-hold-for-the-designators-solutions
+  (with-household-kitchen ()
+    (spawn :cereal-1 :breakfast-cereal '((1.4 1.5 0.9) (0 0 0 1)))
+    (let* ((table (desig:make-designator :object '((:type :counter-top) (:urdf-name :dining-area-jokkmokk-table-main)
+                                                   (:part-of :iai-kitchen))))
+           (d (location `(:on ,table) `(:for ,(desig:an object (type breakfast-cereal)))
+                        '(:range 0.2) '(:side :front)))
+           (points (loop for s = d then (desig:next-solution s)
+                         repeat 60 while s
+                         collect (xyz (cl-transforms-stamped:pose-stamped->pose (desig:reference s))))))
+      (is (= 60 (length points)) "60 solutions")
+      ;; the solutions are placed anywhere in their cell: half a cell (0.025 m) of tolerance
+      (is (every (lambda (p) (< (second p) 0.336d0)) points)
+          "every solution in the table's front half (map y < 0.31, and half a cell): ~s"
+          (remove-if (lambda (p) (< (second p) 0.336d0)) points))
+      (is (every (lambda (p) (< (dist-xy p '(-3.38 0.31)) 0.24d0)) points)
+          "every solution within 0.2 m (and a cell) of the table's centre")
+      (is (null (cram-plans-compat::modern-location-description d))
+          "(side front) does not make the designator one of the era's"))
+    (let ((era (desig:make-designator :location '((:to :reach) (:side :left) (:obj nil)))))
+      (is (equal '(:arm :left)
+                 (assoc :arm (cram-plans-compat::modern-location-description era)))
+          "beside (to reach), (side left) is still the era's arm"))))
+
 (test table-setting-bowl-slot
   (with-household-kitchen ()
     (spawn :bowl-1 :bowl '((1.0 0.0 2.0) (0 0 0 1)))

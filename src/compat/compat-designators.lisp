@@ -11,12 +11,21 @@
 (in-package :cram-plans-compat)
 
 (defparameter *modern-location-keys*
-  '(:pose :poses :location :object :target :visible-for :reachable-for :on :for :arm
-    :urdf-name :part-of :name :type :frame)
+  '(:pose :poses :location :object :target :visible-for :reachable-for :reachable-from :on :for
+    :arm :urdf-name :part-of :name :type :frame
+    ;; the household locations: containers, surfaces and relations to other objects
+    :in :above :side :range :range-invert :level :level-invert :z-offset :context :object-count
+    :attachment :attachments :orientation :threshold
+    :left-of :right-of :in-front-of :behind :near :far-from)
   "The keys today's location generators and costmaps read.")
 
 (defparameter *old-location-keys* '(:to :obj :side)
-  "The era's keys this layer translates.")
+  "The era's keys this layer translates. (:side :left) or (:side :right) is the era's arm only
+beside (:to ...) or (:obj ...); on its own, (side front) and the like are today's sides of a
+container or a surface.")
+
+(defparameter *era-marker-keys* '(:to :obj)
+  "The keys that make a location designator one of the era's.")
 
 (defvar *user-location-keys* '()
   "Keys added with REGISTER-LOCATION-KEY by code that handles them itself.")
@@ -31,7 +40,8 @@ message anyway: that message is given only when nothing resolved)."
 
 (defun known-location-keys ()
   "The location keys this library and REGISTER-LOCATION-KEY know of."
-  (append *modern-location-keys* *old-location-keys* (reverse *user-location-keys*)))
+  (remove-duplicates (append *modern-location-keys* *old-location-keys* (reverse *user-location-keys*))
+                     :from-end t))
 
 (defun unknown-location-keys (designator)
   (remove-if (lambda (k) (member k (known-location-keys)))
@@ -84,7 +94,7 @@ means: NAME itself, else without the iai_kitchen_ prefix, with _counter_top read
 it has no old key. Keys it does not know pass through unchanged."
   (let ((props (desig:properties designator)))
     (let ((on (second (assoc :on props))) (name (second (assoc :name props))))
-      (when (or (some (lambda (p) (member (first p) *old-location-keys*)) props)
+      (when (or (some (lambda (p) (member (first p) *era-marker-keys*)) props)
                 (and (stringp on) name))
         (loop for (key value) in props
               append (case key
@@ -94,7 +104,9 @@ it has no old key. Keys it does not know pass through unchanged."
                               (t (error "Location designator ~a: (:to ~s) is unknown; the era's ~
                                          values are :SEE and :REACH." designator value))))
                        ((:obj :object) (list (list :object (modern-object value))))
-                       (:side (list (list :arm value)))
+                       (:side (if (member value '(:left :right))
+                                  (list (list :arm value))
+                                  (list (list :side value))))
                        (:on (if (stringp value)
                                 (let ((env (or (btr:get-environment-object)
                                                (error "Location designator ~a: (:on ~s) needs an ~
