@@ -202,3 +202,38 @@ verdict table check it again."
         (is (null accepted))
         (is (consp hits))
         (is (= 4 calls))))))
+
+(test regrasp-check-of-a-placing-sample
+  "An object put down on a surface must be graspable there again from where the robot stands
+(FD-PLANS::OBJECT-REGRASPABLE-AT-P): true on the island in front of the robot, false at the
+sink behind it; either way the held object ends where it was, attached to the same hand."
+  (setup *island*)
+  (let ((resting (btr:pose (btr:object btr:*current-bullet-world* :object-1))))
+   (fetched-at-island)
+   (let* ((robot (btr:get-robot-object))
+         (attached (btr:attached-objects robot))
+         (before (object-position))
+         (object (desig:an object (type bottle) (name object-1))))
+    (is (= 1 (length attached)) "the fetched object is held: ~s" attached)
+    (flet ((unchanged-p ()
+             (and (equal attached (btr:attached-objects robot))
+                  (< (cl-transforms:v-dist before (object-position)) 1d-6))))
+      (is (eq t (urdf-proj:with-simulated-robot
+                  (fd-plans::object-regraspable-at-p object resting))))
+      (is (unchanged-p) "the held object was put back after the check")
+      (is (null (urdf-proj:with-simulated-robot
+                  (fd-plans::object-regraspable-at-p object
+                                                     (pp-plans:pose-in-map (apply #'pose *sink*))))))
+      (is (unchanged-p) "the held object was put back after the failed check"))))
+  ;; which targets are checked: surfaces, not containers, attachments, ABOVE or given poses
+  (let ((fd-plans::*check-regrasping* t)
+        (?table (desig:an object (type counter-top) (urdf-name kitchen-island-surface)))
+        (?in (desig:an object (type drawer) (urdf-name sink-area-left-upper-drawer-main))))
+    (is (fd-plans::regrasp-check-target-p (desig:a location (on ?table))))
+    (let ((?bowl (desig:an object (type bowl))))
+      (is (fd-plans::regrasp-check-target-p (desig:a location (right-of ?bowl) (near ?bowl)))))
+    (is (not (fd-plans::regrasp-check-target-p (poses-location *island*))))
+    (is (not (fd-plans::regrasp-check-target-p (desig:a location (in ?in)))))
+    (is (not (fd-plans::regrasp-check-target-p (desig:a location (above ?in)))))
+    (let ((fd-plans::*check-regrasping* nil))
+      (is (not (fd-plans::regrasp-check-target-p (desig:a location (on ?table))))))))
