@@ -710,6 +710,7 @@ fetching, delivering and transporting, with CRAM's retries and projection pre-ch
   :serial t
   :components ((:file "fd-package")
                (:file "fd-occasions")
+               (:file "fd-placing-memory")
                (:file "fd-prechecks")
                (:file "fd-navigation")
                (:file "fd-search")

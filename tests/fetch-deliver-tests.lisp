@@ -237,3 +237,62 @@ sink behind it; either way the held object ends where it was, attached to the sa
     (is (not (fd-plans::regrasp-check-target-p (desig:a location (above ?in)))))
     (let ((fd-plans::*check-regrasping* nil))
       (is (not (fd-plans::regrasp-check-target-p (desig:a location (on ?table))))))))
+
+;;; Where an object was put down from, offered again to the fetch that takes it back.
+
+(defun fetch-location-first-pose ()
+  (let ((?robot (rob-int:current-robot-name)))
+    (pp-plans:pose-in-map
+     (desig:reference (desig:a location (reachable-for ?robot)
+                               (object (desig:an object (type bottle) (name object-1))))))))
+
+(test a-delivered-object-is-fetched-from-where-it-was-put-down
+  (fetched-at-island)
+  (let ((result (run-plan (lambda () (exe:perform (deliver-action (list *sink*) (list *robot-at-sink*)))))))
+    (is (typep result 'desig:object-designator) "the delivery failed: ~a" result))
+  (let ((put-from (cl-transforms:make-3d-vector 0.8 0.7 0)))
+    (is (< (cl-transforms:v-dist (cl-transforms:origin (fetch-location-first-pose)) put-from) 1d-3)
+        "the first base pose offered is where the robot put it down from")
+    ;; moved by 5 cm: no longer offered
+    (let ((o (btr:object btr:*current-bullet-world* :object-1)))
+      (setf (btr:pose o) (cl-transforms:make-pose
+                          (cl-transforms:v+ (cl-transforms:origin (btr:pose o))
+                                            (cl-transforms:make-3d-vector 0 0.05 0))
+                          (cl-transforms:orientation (btr:pose o)))))
+    (is (null (fd-plans::placing-record :object-1)) "a moved object has no record")
+    (is (> (cl-transforms:v-dist (cl-transforms:origin (fetch-location-first-pose)) put-from) 1d-3)
+        "a moved object's fetch location starts with the costmap's samples"))
+  ;; a new belief state remembers nothing
+  (setup *island*)
+  (is (null (fd-plans::placing-record :object-1))))
+
+(test the-picking-up-pre-check-opens-the-gripper-as-the-action-does
+  (setup *island*)
+  (let* ((robot (btr:get-robot-object))
+         (joints (urdf-proj::gripper-joints :left))
+         (seen '()))
+    (setf (btr:pose robot) (pp-plans:pose-in-map (apply #'pose *robot-at-island*)))
+    ;; the gripper starts closed
+    (btr:set-robot-state-from-joints
+     (mapcar (lambda (j) (list j (btr:joint-limits robot j))) joints) robot)
+    (let ((closed (btr:joint-state robot (first joints))))
+      (sb-int:encapsulate 'fd-plans::trajectory-reachable-p 'record-gripper
+                          (lambda (f arm &rest args)
+                            (push (cons arm (btr:joint-state robot (first (urdf-proj::gripper-joints arm))))
+                                  seen)
+                            (apply f arm args)))
+      (unwind-protect
+           (urdf-proj:with-simulated-robot
+             (fd-plans::check-picking-up-collisions
+              (desig:an object (type bottle) (name object-1)) :arms '(:left)))
+        (sb-int:unencapsulate 'fd-plans::trajectory-reachable-p 'record-gripper))
+      (let* ((opening (man-int:get-object-type-gripper-opening :bottle))
+             (multiplier (urdf-proj::fact-value '?m `(rob-int:gripper-meter-to-joint-multiplier
+                                                      ,(rob-int:current-robot-name) ?m)))
+             (expected (urdf-proj::clamp-joint robot (first joints) (* opening multiplier))))
+        (is (consp seen) "the pre-check checked a grasp")
+        (is (every (lambda (s) (< (abs (- (cdr s) expected)) 1d-9)) seen)
+            "the gripper was open to ~,3f (the bottle's ~,3f m) while checked: ~s" expected opening seen)
+        (is (> (abs (- expected closed)) 0.1) "open differs from closed")
+        (is (< (abs (- (btr:joint-state robot (first joints)) closed)) 1d-9)
+            "the gripper is closed again after the check")))))

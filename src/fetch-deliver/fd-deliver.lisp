@@ -137,6 +137,7 @@ the target sample can be found (a designator error). Returns the object designat
                       (cpl:fail 'common-fail:object-unreachable
                                 :description (format nil "Placing ~a at ~a failed: ~a"
                                                      (object-text ?object) ?target e))))
+                  (remember-placing ?object ?arm)
                   (desig:current-desig ?object))))))))))))
 
 (defun drop-at-sink ()

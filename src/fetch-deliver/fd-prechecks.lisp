@@ -47,9 +47,31 @@ robot is put back."
                                    append (man-int:get-traj-poses-by-label trajectory label))
                          :coarse coarse))
 
+(defun call-with-gripper-opening (arm opening thunk)
+  "Call THUNK with the gripper of ARM opened to OPENING (metres, as the setting-gripper action
+the picking-up action opens it to while reaching; NIL: as it is), and put the gripper back
+afterwards. Checked in the belief state."
+  (if (null opening)
+      (funcall thunk)
+      (let* ((robot (btr:get-robot-object))
+             (joints (urdf-proj::gripper-joints arm))
+             (before (mapcar (lambda (j) (list j (btr:joint-state robot j))) joints))
+             (multiplier (or (urdf-proj::fact-value
+                              '?m `(rob-int:gripper-meter-to-joint-multiplier ,(robot-name) ?m))
+                             1)))
+        (unwind-protect
+             (progn
+               (btr:set-robot-state-from-joints
+                (mapcar (lambda (j) (list j (urdf-proj::clamp-joint robot j (* opening multiplier))))
+                        joints)
+                robot)
+               (funcall thunk))
+          (btr:set-robot-state-from-joints before robot)))))
+
 (defun check-picking-up-collisions (object &key arms grasps)
   "The first (arm grasp) of picking up OBJECT, for ARMS and GRASPS (NIL: any), whose grasp
-poses the arm reaches free of collisions, among up to *PICKING-UP-CHECK-SAMPLES*; signals
+poses the arm reaches free of collisions with its gripper opened as the action opens it, among
+up to *PICKING-UP-CHECK-SAMPLES*; signals
 OBJECT-UNREACHABLE when none does."
   (let* ((?object object)
          (groundings (pp-plans:ground-action
@@ -61,9 +83,13 @@ OBJECT-UNREACHABLE when none does."
              (grasp (desig:desig-prop-value resolved :grasp)))
         (when (and (or (null arms) (member arm arms)) (or (null grasps) (member grasp grasps)))
           (when (>= (incf tried) *picking-up-check-samples*) (return))
-          (when (pp-plans::with-object-being-grasped (object)
-                  (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
-                                          '(:grasping) :coarse nil))
+          ;; the hand as it closes in on the object: open as wide as the action opens it
+          (when (call-with-gripper-opening
+                 arm (desig:desig-prop-value resolved :gripper-opening)
+                 (lambda ()
+                   (pp-plans::with-object-being-grasped (object)
+                     (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
+                                             '(:grasping) :coarse nil))))
             (return-from check-picking-up-collisions (list arm grasp))))))
     (cpl:fail 'common-fail:object-unreachable
               :description (format nil "No grasp of ~a with the ~{~(~a~)~^ or ~} arm is reachable ~
@@ -104,11 +130,14 @@ OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pos
 ;;; when it is put down): a place from which no grasp of it is reachable is rejected when it
 ;;; is chosen, so that another sample or base pose is taken.
 
-(defparameter *check-regrasping* nil
+(defparameter *check-regrasping* t
   "When true, the placing pre-check also requires that the object, once put down at a sample
 of a surface target (REGRASP-CHECK-TARGET-P), can be grasped again from where the robot
-stands (OBJECT-REGRASPABLE-AT-P). Off by default: measured on the household campaign it
-fixed as many runs as it broke (see the commit that added it).")
+stands (OBJECT-REGRASPABLE-AT-P), with its gripper opened as picking it up opens it. The
+table is cleared in reverse order, so what stands around the object when it is put down still
+stands there when it is fetched; together with the base pose it was put down from (offered
+first to that fetch), a place the open hand cannot reach again is not taken. NIL: any place
+the object can be put down at.")
 
 (defun regrasp-check-target-p (target)
   "True when an object put down at TARGET (a location designator) must be graspable there
