@@ -79,3 +79,26 @@
       (is (< (abs (- -0.45 (cl-transforms:y p))) 1d-6)))
     (signals error (costmap:gen-costmap-sample-point
                     c :sampling-function (lambda (grid) (declare (ignore grid)) '(99 0))))))
+
+;;; The user's metadata, typed in their own package as the tutorials do, is read again after
+;;; each change: defined, redefined, removed, and in a package made afterwards.
+
+(test user-metadata-follows-each-change
+  (let ((package (make-package (format nil "COSTMAP-USER-METADATA-~d" (random 1000000))
+                               :use '(:cl :prolog))))
+    (unwind-protect
+         (let ((size (intern "COSTMAP-SIZE" package))
+               (group (intern "MY-METADATA" package)))
+           (flet ((define (n)
+                    ;; as a user types it in their package
+                    (eval `(prolog:def-fact-group ,group () (prolog:<- (,size ,n ,n)))))
+                  (width () (costmap:width (costmap:make-location-costmap))))
+             (let ((before (width)))
+               (define 7)
+               (is (= 7 (width)) "the user's size is used")
+               (define 9)
+               (is (= 9 (width)) "the redefined size is used")
+               (prolog:remove-fact-group group)
+               (is (= before (width)) "without the user's group, the size is the robot's again"))))
+      (ignore-errors (prolog:remove-fact-group (find-symbol "MY-METADATA" package)))
+      (delete-package package))))

@@ -25,6 +25,30 @@
   "True while the user's metadata predicates are queried (a user clause that asks the
 metadata interface again then gets no user answer instead of recursing without end).")
 
+(defvar *user-metadata-candidates* (make-hash-table :test 'eq :synchronized t)
+  "Metadata functor -> (generation package-count . symbols): the user's predicates named like
+it (USER-METADATA-CANDIDATES), as found when the Prolog database had that generation and the
+image that many packages.")
+
+(defun user-metadata-candidates (functor)
+  "The predicates named like FUNCTOR in other packages that have clauses, packages taken in
+name order. Looked up again only after the Prolog database or the set of packages changed."
+  (let* ((generation (prolog:database-generation))
+         (packages (list-all-packages))
+         (count (length packages))
+         (cached (gethash functor *user-metadata-candidates*)))
+    (if (and cached (eql (first cached) generation) (eql (second cached) count))
+        (cddr cached)
+        (let ((name (symbol-name functor)) (candidates '()))
+          (dolist (package (sort packages #'string< :key #'package-name))
+            (let ((symbol (find-symbol name package)))
+              (when (and symbol (not (eq symbol functor)) (not (member symbol candidates))
+                         (prolog:predicate-clauses symbol))
+                (push symbol candidates))))
+          (setf candidates (nreverse candidates))
+          (setf (gethash functor *user-metadata-candidates*) (list* generation count candidates))
+          candidates))))
+
 (defun user-costmap-metadata-facts (fact)
   "The facts (FUNCTOR value...) stated by the user for the metadata FACT (its functor is one
 of this package's metadata predicates, its arguments are only counted): the answers of every
@@ -33,17 +57,11 @@ wrote with the short names in their own package.  Packages are taken in name ord
   (unless (or *reading-user-metadata* (not (consp fact)) (not (symbolp (car fact))))
     (let* ((functor (car fact))
            (arity (length (cdr fact)))
-           (name (symbol-name functor))
-           (candidates '()))
-      (dolist (package (sort (copy-list (list-all-packages)) #'string< :key #'package-name))
-        (let ((symbol (find-symbol name package)))
-          (when (and symbol (not (eq symbol functor)) (not (member symbol candidates))
-                     (prolog:predicate-clauses symbol))
-            (push symbol candidates))))
+           (candidates (user-metadata-candidates functor)))
       (when candidates
         (let ((*reading-user-metadata* t)
               (vars (loop for i below arity collect (intern (format nil "?U~d" i) :cram-location-costmap))))
-          (loop for symbol in (nreverse candidates)
+          (loop for symbol in candidates
                 append (loop for answer in (cut:force-ll (prolog `(,symbol ,@vars)))
                              collect (cons functor (mapcar (lambda (v) (cut:var-value v answer)) vars)))))))))
 
