@@ -296,3 +296,31 @@ sink behind it; either way the held object ends where it was, attached to the sa
         (is (> (abs (- expected closed)) 0.1) "open differs from closed")
         (is (< (abs (- (btr:joint-state robot (first joints)) closed)) 1d-9)
             "the gripper is closed again after the check")))))
+
+(test only-attachment-poses-skip-the-stability-check
+  ;; CRAM's always-stable locations are the predefined attachments; a costmap sample of the same
+  ;; designator (taken when the attachment poses were rejected) is dropped in a copy first
+  (btw-tut:init-projection)
+  (let* ((?tray (desig:an object (type drawer) (urdf-name sink-area-dish-washer-tray-bottom)
+                          (part-of iai-kitchen)))
+         (target (desig:a location (above ?tray) (for (desig:an object (type spoon)))
+                          (attachments (dish-washer-drawer-center))))
+         (attachment (cl-transforms:origin
+                      (pp-plans:pose-in-map (first (costmap::attachment-poses target))))))
+    (is (< (cl-transforms:v-dist (cl-transforms:origin (pp-plans:pose-in-map (desig:reference target)))
+                                 attachment)
+           1d-6)
+        "the first solution is the attachment pose")
+    (is-true (fd-plans::solution-stable-p target) "the attachment pose needs no stability check")
+    (let ((sample (loop for s = (desig:next-solution target) then (desig:next-solution s)
+                        repeat 5 while s
+                        when (> (cl-transforms:v-dist (cl-transforms:origin
+                                                       (pp-plans:pose-in-map (desig:reference s)))
+                                                      attachment)
+                                1d-3)
+                          return s)))
+      (is-true sample "a later solution is a costmap sample away from the attachment")
+      (when sample
+        (is (null (fd-plans::solution-stable-p sample)) "a costmap sample is checked")))
+    (is-true (fd-plans::solution-stable-p (desig:a location (above ?tray)))
+             "an ABOVE target without attachments needs no check (dropping into it is the point)")))

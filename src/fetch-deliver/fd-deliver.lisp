@@ -46,6 +46,22 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
   "CRAM's stable targets: a location with ATTACHMENT(S) or ABOVE needs no stability check."
   (or (prop target :attachment) (prop target :attachments) (prop target :above)))
 
+(defun solution-stable-p (target)
+  "True when the current solution of TARGET needs no stability check: one of its predefined
+ATTACHMENTS poses (a sample of the costmap of the same designator, when the attachments were
+rejected, is dropped in a copy as any other), any solution of a singular ATTACHMENT, or of an
+ABOVE target without attachments."
+  (cond ((prop target :attachments)
+         (let ((pose (ignore-errors (pp-plans:pose-in-map (desig:reference target)))))
+           (and pose
+                (some (lambda (attachment)
+                        (< (cl-transforms:v-dist (cl-transforms:origin pose)
+                                                 (cl-transforms:origin
+                                                  (pp-plans:pose-in-map attachment)))
+                           1d-3))
+                      (ignore-errors (costmap::attachment-poses target))))))
+        (t (target-stable-p target))))
+
 (defun deliver (&key object arm target robot-location &allow-other-keys)
   "Deliver the held OBJECT to TARGET (a location designator) with ARM (NIL: the arm holding
 it), standing at ROBOT-LOCATION, at a sample of TARGET within the robot's reach there
@@ -128,7 +144,7 @@ the target sample can be found (a designator error). Returns the object designat
                   (let ((?look ?target))
                     (exe:perform (desig:an action (type turning-towards) (target ?look))))
                   (setf ?target (check-placing-collisions ?object ?arm ?target))
-                  (unless (target-stable-p ?target)
+                  (unless (solution-stable-p ?target)
                     (check-placing-pose-stability ?object ?target))
                   (handler-case
                       (exe:perform (desig:an action (type placing) (arm ?arm) (object ?object)
