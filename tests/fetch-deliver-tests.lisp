@@ -324,3 +324,47 @@ sink behind it; either way the held object ends where it was, attached to the sa
         (is (null (fd-plans::solution-stable-p sample)) "a costmap sample is checked")))
     (is-true (fd-plans::solution-stable-p (desig:a location (above ?tray)))
              "an ABOVE target without attachments needs no check (dropping into it is the point)")))
+
+(test a-place-inside-another-body-is-taken
+  ;; a held object let go where it reaches into a wall is thrown out by the physics: the
+  ;; placing pre-check sees it (FD-PLANS::OBJECT-PENETRATIONS); the surface it rests on and
+  ;; the robot holding it do not count
+  (setup *island*)
+  (let ((resting (btr:pose (btr:object btr:*current-bullet-world* :object-1))))
+    (fetched-at-island)
+    (let ((object (desig:an object (type bottle) (name object-1)))
+          (before (object-position))
+          (attached (btr:attached-objects (btr:get-robot-object))))
+      (is (null (urdf-proj:with-simulated-robot (fd-plans::object-penetrations object resting)))
+          "where it stood on the island, it reaches into nothing")
+      (let ((inside (urdf-proj:with-simulated-robot
+                      (fd-plans::object-penetrations object (pp-plans:pose-in-map
+                                                             (apply #'pose *in-fridge*))))))
+        (is (consp inside) "behind the closed fridge door it is inside the fridge: ~s" inside)
+        (is (every (lambda (hit) (eq :iai-kitchen (first hit))) inside)))
+      (is (< (cl-transforms:v-dist before (object-position)) 1d-6) "the object was put back")
+      (is (equal attached (btr:attached-objects (btr:get-robot-object))) "and is held again"))))
+
+(test an-object-counts-at-a-costmap-location-within-the-proximity
+  ;; OBJECT-AT-LOCATION against a costmap: inside it, or within FD-PLANS::*LOCATION-PROXIMITY*
+  ;; (5 cm) of its places, as a released object settles; farther off it does not hold
+  (setup *island*)
+  (let* ((island (btr:link-pose (btr:get-environment-object) "kitchen_island_surface"))
+         (centre (cl-transforms:origin island))
+         (o (btr:object btr:*current-bullet-world* :object-1))
+         (z (cl-transforms:z (object-position)))
+         (location (desig:a location
+                            (on (desig:an object (type counter-top) (urdf-name kitchen-island-surface)
+                                          (part-of iai-kitchen)))
+                            (for (desig:an object (type bottle)))
+                            (range 0.2))))
+    (flet ((at (dx)
+             (setf (btr:pose o) (cl-transforms:make-pose
+                                 (cl-transforms:make-3d-vector (+ (cl-transforms:x centre) dx)
+                                                               (cl-transforms:y centre) z)
+                                 (cl-transforms:make-identity-rotation)))
+             (costmap:forget-designator-costmap location)
+             (fd-plans::object-at-location-p :object-1 location)))
+      (is-true (at 0.1) "inside the range")
+      (is-true (at 0.235) "3.5 cm beyond the range (its cell lies outside it): within the proximity")
+      (is (null (at 0.35)) "15 cm beyond the range"))))

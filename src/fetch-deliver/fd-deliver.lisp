@@ -21,7 +21,8 @@ sample (apart from CRAM's 4 retries of undeliverable targets).")
         (desig:a location (reachable-for ?robot) (location ?target)))))
 
 (defun check-placing-pose-stability (object target)
-  "Drop a copy of OBJECT at a sample of TARGET in a copy of the belief state; signal a
+  "Drop a copy of OBJECT at a sample of TARGET in a copy of the belief state as a release
+settles it (PP-PLANS::SETTLE-RELEASED-OBJECT, for *STABILITY-SECONDS*); signal a
 HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DISPLACEMENT*."
   (let* ((name (designator-object-name object))
          (o (and name (btr:object btr:*current-bullet-world* name)))
@@ -33,7 +34,11 @@ HIGH-LEVEL-FAILURE \"Pose unstable.\" when it moves more than *STABILITY-MAX-DIS
              (let ((robot (find-if #'btr:robot-object-p (btr:objects world))))
                (when robot (btr:detach-all-objects robot))
                (setf (btr:pose copy) pose)
-               (btr:simulate world *stability-seconds*)
+               ;; as a release comes to rest: lowered onto the surface below, the robot out
+               ;; of the physics (standing in the way, it would catch what the release throws)
+               (let ((btr:*current-bullet-world* world)
+                     (pp-plans::*settling-seconds* *stability-seconds*))
+                 (pp-plans::settle-released-object name))
                (let ((moved (cl-transforms:v-dist (cl-transforms:origin (btr:pose copy))
                                                   (cl-transforms:origin pose))))
                  (when (> moved *stability-max-displacement*)

@@ -5,7 +5,8 @@
 (in-package :cram-fetch-deliver-plans)
 
 (defparameter *location-proximity* 0.05d0
-  "Metres within which an object counts as at a location designator with a POSE or POSES.")
+  "Metres within which an object counts as at a location designator: of one of its POSE or
+POSES, or of its costmap's places.")
 
 (defun designator-object-name (object)
   "The belief-state name of the object designator (or name) OBJECT, or NIL when it has none."
@@ -62,7 +63,8 @@ of the environment or the robot, or is held."
 
 (defun object-at-location-p (object location)
   "True when the object OBJECT (designator or name) is in the belief state at LOCATION: within
-*LOCATION-PROXIMITY* of one of its poses, or inside its costmap."
+*LOCATION-PROXIMITY* of one of its poses, or inside its costmap or within *LOCATION-PROXIMITY*
+of it (a released object settles)."
   (let* ((name (designator-object-name object))
          (o (and name (btr:object btr:*current-bullet-world* name))))
     (when (and o (typep location 'desig:location-designator) (not (object-held-p name)))
@@ -77,8 +79,14 @@ of the environment or the robot, or is held."
             (let ((costmap (ignore-errors (costmap:designator-costmap location))))
               (and costmap
                    (ignore-errors
-                    (plusp (costmap:get-map-value costmap (cl-transforms:x origin)
-                                                  (cl-transforms:y origin)))))))))))
+                    ;; a released object settles: its place, or one within the proximity
+                    (loop with x = (cl-transforms:x origin) and y = (cl-transforms:y origin)
+                          for (dx dy) in '((0 0) (1 0) (-1 0) (0 1) (0 -1)
+                                           (0.7071 0.7071) (0.7071 -0.7071)
+                                           (-0.7071 0.7071) (-0.7071 -0.7071))
+                            thereis (plusp (costmap:get-map-value
+                                            costmap (+ x (* dx *location-proximity*))
+                                            (+ y (* dy *location-proximity*)))))))))))))
 
 (defun torso-at-p (joint-state)
   "True when the robot's torso is within 1 cm of JOINT-STATE (metres, :UPPER-LIMIT,

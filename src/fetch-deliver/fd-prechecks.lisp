@@ -116,6 +116,7 @@ OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pos
                             (and (pp-plans::with-object-being-placed (object current)
                                    (trajectory-reachable-p arm trajectory
                                                            '(:reaching :putting :retracting)))
+                                 (object-fits-at-p object current)
                                  (or (not (regrasp-check-target-p current))
                                      (object-regraspable-at-p
                                       object (pp-plans:pose-in-map (desig:reference current)))))))
@@ -151,11 +152,10 @@ target of given poses (POSE, POSES) is the caller's choice and not checked."
        (not (target-stable-p target))
        (not (prop target :in))))
 
-(defun object-regraspable-at-p (object pose)
-  "True when OBJECT (an object designator of the belief state, held by the robot), standing
-free at POSE (map), can be grasped by the robot from where it stands, with any arm and grasp
-(CHECK-PICKING-UP-COLLISIONS). Checked in the belief state: the object is let go and moved
-to POSE, and afterwards put back and attached as it was; the robot is put back."
+(defun call-with-object-let-go-at (object pose thunk)
+  "Call THUNK with OBJECT (an object designator of the belief state, held by the robot) let go
+and standing at POSE (map); afterwards the object is put back and attached as it was, and the
+robot is put back. Returns THUNK's value, or T when there is no such object or robot."
   (let* ((name (designator-object-name object))
          (robot (btr:get-robot-object))
          (o (and name (btr:object btr:*current-bullet-world* name))))
@@ -170,13 +170,66 @@ to POSE, and afterwards put back and attached as it was; the robot is put back."
                   (progn
                     (btr:detach-object robot o)
                     (setf (btr:pose o) pose)
-                    (handler-case (progn (check-picking-up-collisions object) t)
-                      ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil)))
+                    (funcall thunk o))
                (setf (btr:pose o) before)
                (dolist (a attachments)
                  (destructuring-bind (n link loose grasp) a
                    (declare (ignore n))
                    (btr:attach-object robot o :link link :loose loose :grasp grasp))))))))))
+
+(defun object-regraspable-at-p (object pose)
+  "True when OBJECT (an object designator of the belief state, held by the robot), standing
+free at POSE (map), can be grasped by the robot from where it stands, with any arm and grasp
+(CHECK-PICKING-UP-COLLISIONS). Checked in the belief state (CALL-WITH-OBJECT-LET-GO-AT)."
+  (call-with-object-let-go-at
+   object pose
+   (lambda (o)
+     (declare (ignore o))
+     (handler-case (progn (check-picking-up-collisions object) t)
+       ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil)))))
+
+(defparameter *placing-penetration* 0.01d0
+  "Metres an object put down may reach into another body (the surface it is put on aside, the
+put-down pose rests on it) before the place counts as taken.")
+
+(defun supporting-part-p (object link-index height)
+  "True when the part LINK-INDEX of OBJECT (-1: the whole body) has its top below HEIGHT: a
+surface under what stands at HEIGHT, not a wall beside it."
+  (multiple-value-bind (lo hi) (if (and (btr:robot-object-p object) (>= link-index 0))
+                                   (btr:aabb object link-index)
+                                   (btr:aabb object))
+    (declare (ignore lo))
+    (< (cl-transforms:z hi) height)))
+
+(defun object-penetrations (object pose)
+  "What OBJECT (held by the robot), let go at POSE (map), reaches into by more than
+*PLACING-PENETRATION*, the robot and the surfaces under the object's origin aside (a put-down
+pose rests on its surface; settling lifts it out): a list of (object-name link-name). Checked
+in the belief state (CALL-WITH-OBJECT-LET-GO-AT)."
+  (let ((robot (btr:get-robot-object))
+        (height (cl-transforms:z (cl-transforms:origin pose))))
+    (call-with-object-let-go-at
+     object pose
+     (lambda (o)
+       (let ((world btr:*current-bullet-world*))
+         (remove-duplicates
+          (loop for (nil nil other other-link) in (cram-native:object-contacts
+                                                   (btr::world-handle world) (btr:object-handle o)
+                                                   :threshold (- *placing-penetration*)
+                                                   :except (and robot (list (btr:object-handle robot))))
+                for other-object = (btr::object-by-handle world other)
+                when (and other-object (not (supporting-part-p other-object other-link height)))
+                  collect (list (btr:name other-object) (btr::link-name-of other-object other-link)))
+          :test #'equal))))))
+
+(defun object-fits-at-p (object target)
+  "True when OBJECT (held by the robot), put down at the current solution of TARGET as placing
+puts it (PP-PLANS::PLACING-TARGET-POSE), reaches into nothing: a release inside a shelf board
+or the dishwasher tray's wall would make the physics throw it out."
+  (let ((penetrations (object-penetrations
+                       object (pp-plans::placing-target-pose
+                               object (pp-plans:object-designator-type object) target))))
+    (or (eq penetrations t) (null penetrations))))
 
 (defun object-visible-from-p (object pose)
   "True when the robot, standing at POSE (map) and looking at OBJECT (an object designator of
