@@ -27,6 +27,20 @@
                    (handler-case (funcall thunk) (serious-condition (c) c)))))
     (values result (get-output-stream-string log))))
 
+(defun run-recording-the-setting (types demo)
+  "Run DEMO (a function) quietly, recording where the objects of TYPES are once the table is
+set: (values result-or-condition log ((type . position) ...))."
+  (let ((setting nil))
+    (multiple-value-bind (result log)
+        (run-quietly
+         (lambda ()
+           (let ((demos::*after-setting-hook*
+                   (lambda ()
+                     (setf setting (loop for type in types
+                                         collect (cons type (object-position type)))))))
+             (funcall demo))))
+      (values result log setting))))
+
 (test spawning-puts-each-object-into-its-closed-container
   (btw-tut:init-projection)
   (demos:initialize)
@@ -69,15 +83,9 @@
   ;; the bowl and the spoon: from two closed sink drawers to the table, then into the
   ;; dishwasher; the same seed gives the same run
   (btw-tut:init-projection)
-  (let ((setting nil) (types '(:bowl :spoon)))
-    (multiple-value-bind (result log)
-        (run-quietly
-         (lambda ()
-           (let ((demos::*after-setting-hook*
-                   (lambda ()
-                     (setf setting (loop for type in types
-                                         collect (cons type (object-position type)))))))
-             (demos:household-demo :object-list types :seed 2))))
+  (let ((types '(:bowl :spoon)))
+    (multiple-value-bind (result log setting)
+        (run-recording-the-setting types (lambda () (demos:household-demo :object-list types :seed 2)))
       (is (equal types result) "the demo failed: ~a~%~a" result
           (subseq log (max 0 (- (length log) 3000))))
       ;; after setting: both on the dining table's top, the spoon right of (map -y... the
@@ -134,15 +142,9 @@
   ;; spoon and cup near the bowl), then cleaned: bowl, cup and spoon in the dishwasher, the
   ;; cereal back on the oven drawer's board, the milk in the trash drawer, all closed.
   (btw-tut:init-projection)
-  (let* ((types demos:*demo-object-types*) (setting nil))
-    (multiple-value-bind (result log)
-        (run-quietly
-         (lambda ()
-           (let ((demos::*after-setting-hook*
-                   (lambda ()
-                     (setf setting (loop for type in types
-                                         collect (cons type (object-position type)))))))
-             (demos:household-demo))))
+  (let ((types demos:*demo-object-types*))
+    (multiple-value-bind (result log setting)
+        (run-recording-the-setting types (lambda () (demos:household-demo)))
       (is (equal types result) "the demo failed: ~a~%~a" result
           (subseq log (max 0 (- (length log) 3000))))
       ;; every object put on the table is where its delivery meant it to be (the warning
