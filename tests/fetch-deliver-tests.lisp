@@ -368,3 +368,17 @@ sink behind it; either way the held object ends where it was, attached to the sa
       (is-true (at 0.1) "inside the range")
       (is-true (at 0.235) "3.5 cm beyond the range (its cell lies outside it): within the proximity")
       (is (null (at 0.35)) "15 cm beyond the range"))))
+
+(test placing-verdicts-hold-across-target-samples
+  ;; a delivery's base pose verdicts are kept by the target's description, not by its current
+  ;; sample: a retry with the next sample does not check the same base poses again
+  (setup *island*)
+  (let* ((target (poses-location *sink* *island*))
+         (next (desig:next-solution target))
+         (object (desig:an object (type bottle) (name object-1))))
+    (is-true next "the target has a second sample")
+    (is (equal (fd-plans::place-key (list object :left target))
+               (fd-plans::place-key (list object :left next))))
+    (is (not (equal (fd-plans::place-key (list object :left target))
+                    (fd-plans::place-key (list object :right target))))
+        "the arm counts")))

@@ -95,6 +95,14 @@ WITH-BASE-POSE-VERDICTS for the same WHAT."
                      (rounded (cl-transforms:z p)))))
           (object (list object)))))
 
+(defun place-key (place)
+  "For the verdict cache: PLACE ((object arm target)) as the object's key, the arm and the
+target's description. Whether the object can be put down from a base pose does not depend on
+which of the target's samples is current (the check draws its own within reach), so the
+verdicts hold across a delivery's retries of new target samples."
+  (destructuring-bind (object arm target) place
+    (list (object-key object) arm (desig:properties (desig:current-desig target)))))
+
 (defun navigate (&key location (park-arms t) see grasp place &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
 (NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
@@ -107,8 +115,7 @@ obstacles."
   (let ((?location (desig:current-desig
                     (check-navigating-collisions
                      location :what (list (object-key see) (object-key grasp)
-                                          (and place (list (object-key (first place)) (second place)
-                                                           (desig:current-desig (third place)))))
+                                          (and place (place-key place)))
                               :accept (lambda (pose)
                                         (and (or (null see) (object-visible-from-p see pose))
                                              (or (null grasp)
