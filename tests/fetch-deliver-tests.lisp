@@ -382,3 +382,27 @@ sink behind it; either way the held object ends where it was, attached to the sa
     (is (not (equal (fd-plans::place-key (list object :left target))
                     (fd-plans::place-key (list object :right target))))
         "the arm counts")))
+
+(test pre-checks-check-paths-only-where-a-sweep-fails-the-motion
+  ;; a pre-check's motions are hypothetical: under :WARN their paths are not checked (nor
+  ;; reported: the performed motion reports its own); under :FAIL they are, as the motion
+  ;; would fail on them
+  (setup *island*)
+  (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map (apply #'pose *robot-at-island*)))
+  (let ((calls 0))
+    (sb-int:encapsulate 'urdf-proj:robot-sweeps 'count-calls
+                        (lambda (f &rest args) (incf calls) (apply f args)))
+    (unwind-protect
+         (flet ((check (mode)
+                  (setf calls 0)
+                  (let ((urdf-proj:*sweep-check* mode))
+                    ;; whether a grasp is found does not matter here
+                    (handler-case
+                        (urdf-proj:with-simulated-robot
+                          (fd-plans::check-picking-up-collisions
+                           (desig:an object (type bottle) (name object-1))))
+                      (common-fail:object-unreachable () nil)))
+                  calls))
+           (is (= 0 (check :warn)) "no path checked under :warn")
+           (is (plusp (check :fail)) "paths checked under :fail"))
+      (sb-int:unencapsulate 'urdf-proj:robot-sweeps 'count-calls))))

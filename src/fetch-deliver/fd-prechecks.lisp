@@ -31,13 +31,16 @@ reverse, and gives up an unreachable pose sooner.")
   "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
 moving-tcp motion would (base offsets, torso heights, collision check; with COARSE, only the
 base offsets of *PRECHECK-BASE-OFFSETS* and torso heights *PRECHECK-TORSO-STEP* apart); the
-robot is put back."
+robot is put back. The path to each pose is checked for sweeps only under
+URDF-PROJ:*SWEEP-CHECK* :FAIL, where a sweep would fail the motion: under :WARN the motion
+itself reports them, when it is performed."
   (call-restoring-robot
    (lambda ()
      (handler-case
          (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
                                               urdf-proj::*base-offsets*))
-               (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*)))
+               (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*))
+               (urdf-proj:*sweep-check* (and (eq urdf-proj:*sweep-check* :fail) :fail)))
            (dolist (pose poses t)
              (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
        (common-fail:manipulation-low-level-failure () nil)))))
