@@ -242,3 +242,24 @@ code, standard output (trimmed) and error output."
              (declare (ignore code))
              (is (not (search key (first paths))) "another input gives another key")))
       (uiop:delete-directory-tree dir :validate t :if-does-not-exist :ignore))))
+
+(test a-household-campaign-records-each-run
+  ;; two seeded household runs on two workers: one JSON line each, with the demo's name, the
+  ;; outcome, and the motions whose path hit something (the demo's arms reach into drawers
+  ;; past their fronts, so a run has some); the summary counts them
+  (let ((results (temp-file "household.jsonl")))
+    (unwind-protect
+         (multiple-value-bind (code out err)
+             (run-cli "--demo" "household" "--batch" "2" "--seed" "1" "--jobs" "2" "--results" results)
+           (is (member code '(0 1)) "exit ~a: ~a" code err)
+           (let ((records (records results)))
+             (is (= 2 (length records)))
+             (dolist (r records)
+               (is (equal "household" (gethash "demo" r)))
+               (is (member (gethash "success" r) '(t nil)))
+               (is (integerp (gethash "sweeps" r)) "no sweep count: ~s" (alexandria:hash-table-alist r)))
+             (is (some (lambda (r) (plusp (gethash "sweeps" r 0))) records)
+                 "a household run with no sweep counted"))
+           (is (search "2 runs" out) "no summary: ~a" out)
+           (is (search "sweeps (motions whose path hits something)" out)))
+      (ignore-errors (delete-file results)))))

@@ -53,15 +53,19 @@ all is well."
                              (log-stream (make-broadcast-stream)))
   "One household demo run drawn from SEED: spawn poses jittered, the kitchen varied (unless
 VARIED is NIL). Returns a plist: :success, :failure (the condition's class or
-\"end-state\"), :error (its text), :problems (of the end state), :seconds."
+\"end-state\"), :error (its text), :problems (of the end state), :sweeps (motions whose path
+hits something), :seconds."
   (let* ((state (sb-ext:seed-random-state seed))
          (demos:*object-spawning-poses* (jittered-spawning-poses state))
          (demos::*varied-kitchen-random-state* (sb-ext:seed-random-state (+ seed 3)))
          (start (get-internal-real-time))
+         (sweeps 0)
          (failure nil) (error nil))
     (seed-everything seed)
     (btw-tut:init-projection)
-    (let ((cpl:*log-stream* log-stream))
+    (let ((cpl:*log-stream* log-stream)
+          (urdf-proj:*sweep-hooks* (cons (lambda (sweep) (declare (ignore sweep)) (incf sweeps))
+                                         urdf-proj:*sweep-hooks*)))
       (handler-case (demos:household-demo :object-list object-types :varied-kitchen varied
                                           :seed seed)
         (serious-condition (e)
@@ -72,6 +76,7 @@ VARIED is NIL). Returns a plist: :success, :failure (the condition's class or
             :failure (or failure (and problems "end-state"))
             :error (or error (and problems (format nil "~{~a~^; ~}" problems)))
             :problems problems
+            :sweeps sweeps
             :seconds (float (/ (- (get-internal-real-time) start) internal-time-units-per-second)
                             1d0)))))
 
@@ -87,6 +92,7 @@ line (index, seed, success, failure type, error, seconds)."
           (gethash "success" record) (and (getf result :success) t)
           (gethash "failure" record) (getf result :failure)
           (gethash "seconds" record) (getf result :seconds)
+          (gethash "sweeps" record) (getf result :sweeps 0)
           (gethash "error" record) (let ((e (getf result :error))) (and e (first-line e))))
     (dolist (key *recovery-keys*) (setf (gethash key record) 0))
     record))
