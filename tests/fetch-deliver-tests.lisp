@@ -406,3 +406,16 @@ sink behind it; either way the held object ends where it was, attached to the sa
            (is (= 0 (check :warn)) "no path checked under :warn")
            (is (plusp (check :fail)) "paths checked under :fail"))
       (sb-int:unencapsulate 'urdf-proj:robot-sweeps 'count-calls))))
+
+(test a-location-next-to-an-object-is-certain-once-the-object-was-found
+  (setup *island*)
+  (let* ((?object (desig:an object (type bottle)))
+         (location (desig:a location (right-of ?object) (near ?object))))
+    (is (not (fd-plans::location-certain-p location)) "not before the bottle was perceived")
+    (let ((?location (poses-location *island*)) (?robot (poses-location *robot-at-island*)))
+      (is (typep (run-plan (lambda ()
+                             (exe:perform (desig:an action (type searching) (object ?object)
+                                                    (location ?location) (robot-location ?robot)))))
+                 'desig:object-designator)
+          "the search found the bottle"))
+    (is-true (fd-plans::location-certain-p location) "certain once it was perceived")))

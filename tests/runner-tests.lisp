@@ -245,7 +245,7 @@ code, standard output (trimmed) and error output."
 
 (test a-household-campaign-records-each-run
   ;; two seeded household runs on two workers: one JSON line each, with the demo's name, the
-  ;; outcome, and the motions whose path hit something (the demo's arms reach into drawers
+  ;; outcome, and the sweeps (what the paths of its motions hit: the demo's arms reach into drawers
   ;; past their fronts, so a run has some); the summary counts them
   (let ((results (temp-file "household.jsonl")))
     (unwind-protect
@@ -261,5 +261,5 @@ code, standard output (trimmed) and error output."
              (is (some (lambda (r) (plusp (gethash "sweeps" r 0))) records)
                  "a household run with no sweep counted"))
            (is (search "2 runs" out) "no summary: ~a" out)
-           (is (search "sweeps (motions whose path hits something)" out)))
+           (is (search "sweeps (a moving link or carried object and what its path hits)" out)))
       (ignore-errors (delete-file results)))))

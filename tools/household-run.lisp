@@ -53,8 +53,8 @@ all is well."
                              (log-stream (make-broadcast-stream)))
   "One household demo run drawn from SEED: spawn poses jittered, the kitchen varied (unless
 VARIED is NIL). Returns a plist: :success, :failure (the condition's class or
-\"end-state\"), :error (its text), :problems (of the end state), :sweeps (motions whose path
-hits something), :seconds."
+\"end-state\"), :error (its text), :problems (of the end state), :sweeps (pairs of a moving
+link or carried object and what its path hits), :seconds."
   (let* ((state (sb-ext:seed-random-state seed))
          (demos:*object-spawning-poses* (jittered-spawning-poses state))
          (demos::*varied-kitchen-random-state* (sb-ext:seed-random-state (+ seed 3)))

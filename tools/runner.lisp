@@ -536,7 +536,7 @@ success rate."
         (maphash (lambda (f c) (format stream "  ~5d  ~a~%" c f)) types)))
     (let ((swept (count-if (lambda (r) (plusp (or (gethash "sweeps" r) 0))) records))
           (total (reduce #'+ records :key (lambda (r) (or (gethash "sweeps" r) 0)))))
-      (format stream "sweeps (motions whose path hits something): ~d in ~d runs, ~,2f per run~%"
+      (format stream "sweeps (a moving link or carried object and what its path hits): ~d in ~d runs, ~,2f per run~%"
               total swept (if (zerop n) 0 (/ total n))))
     (format stream "failures:~%")
     (if (zerop (hash-table-count errors))

@@ -51,15 +51,25 @@ kitchen parts count as robots, their poses are always known."
         (and name (let ((o (btr:object btr:*current-bullet-world* name)))
                     (and o (btr:robot-object-p o)))))))
 
+(defun perceived-p (object)
+  "True when the object designator OBJECT has been perceived: its equation chain has an
+effective designator (what perception equated it with)."
+  (and (typep object 'desig:object-designator)
+       (desig:newest-effective-designator object)
+       t))
+
 (defun location-certain-p (location)
   "CRAM's MAN-INT:LOCATION-CERTAIN: LOCATION has poses, or the object it is relative to is part
-of the environment or the robot, or is held."
+of the environment or the robot, or is held; or that object has been perceived (what searching
+for the location does), so that a location next to a bowl on the table is certain once the
+bowl was found."
   (and (typep location 'desig:location-designator)
        (or (location-poses location)
            (let ((reference (location-reference-object location)))
              (and reference
                   (or (environment-part-p reference)
-                      (object-held-p reference)))))))
+                      (object-held-p reference)
+                      (perceived-p reference)))))))
 
 (defun object-at-location-p (object location)
   "True when the object OBJECT (designator or name) is in the belief state at LOCATION: within
