@@ -66,15 +66,21 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
   return fresh;
 }
 
+Scratch &scratch() {
+  static thread_local Scratch s;
+  return s;
+}
+
 struct Sweep {
   World &w;
+  Scratch &sc = scratch();
   const Object *robot = nullptr;            // null for a body sweep
   btTransform base0, base1;
   btQuaternion rot0, rot1;
   double angle = 0;                          // base rotation over the move
   std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
-  std::vector<char> needed;
-  std::vector<btTransform> lp;               // link poses at the time asked last
+  std::vector<char> &needed = sc.needed;
+  std::vector<btTransform> &lp = sc.lp;      // link poses at the time asked last
   std::vector<Mover> movers;
   std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
   std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
@@ -82,10 +88,10 @@ struct Sweep {
   // the movers' candidates, side by side (Mover::c0, nc): the bodies, their broadphase boxes,
   // whether a pair is done (reported, or left out as a start contact) and the time before
   // which it cannot be reached
-  std::vector<const btCollisionObject *> cands;
-  std::vector<btVector3> cand_lo, cand_hi;
-  std::vector<char> done;
-  std::vector<double> clear_until;
+  std::vector<const btCollisionObject *> &cands = sc.cands;
+  std::vector<btVector3> &cand_lo = sc.cand_lo, &cand_hi = sc.cand_hi;
+  std::vector<char> &done = sc.done;
+  std::vector<double> &clear_until = sc.clear_until;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
   std::vector<int> moving_ids;                           // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
@@ -263,7 +269,9 @@ struct Sweep {
   // ignored) whose boxes meet its move box, from one broadphase query of all the move boxes.
   void gather_candidates(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
     size_t nm = movers.size();
-    std::vector<btVector3> mlo(nm), mhi(nm);
+    std::vector<btVector3> &mlo = sc.mlo, &mhi = sc.mhi;
+    mlo.resize(nm);
+    mhi.resize(nm);
     btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
     for (size_t i = 0; i < nm; ++i) {
       const Mover &m = movers[i];
@@ -276,9 +284,15 @@ struct Sweep {
     // the bodies in the union of the move boxes, their boxes side by side for the tests below
     struct Found : btBroadphaseAabbCallback {
       const Sweep *s;
-      std::vector<const btCollisionObject *> out;
-      std::vector<btVector3> lo, hi;
-      std::vector<std::array<int, 4>> id;  // object, link, filter group, filter mask
+      std::vector<const btCollisionObject *> &out;
+      std::vector<btVector3> &lo, &hi;
+      std::vector<std::array<int, 4>> &id;  // object, link, filter group, filter mask
+      Found(Scratch &sc) : out(sc.found), lo(sc.found_lo), hi(sc.found_hi), id(sc.found_id) {
+        out.clear();
+        lo.clear();
+        hi.clear();
+        id.clear();
+      }
       bool process(const btBroadphaseProxy *bp) override {
         auto *co = static_cast<const btCollisionObject *>(bp->m_clientObject);
         int ob, lb;
@@ -291,28 +305,41 @@ struct Sweep {
         id.push_back({ob, lb, bp->m_collisionFilterGroup, bp->m_collisionFilterMask});
         return true;
       }
-    } found;
+    } found(sc);
     found.s = this;
-    found.out.reserve(256);
-    found.lo.reserve(256);
-    found.hi.reserve(256);
-    found.id.reserve(256);
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
     size_t nf = found.out.size();
     cands.clear();
     cand_lo.clear();
     cand_hi.clear();
-    cands.reserve(4 * nf);
-    cand_lo.reserve(4 * nf);
-    cand_hi.reserve(4 * nf);
+    // the boxes by coordinate, so that one move box is tested against all of them in a loop
+    // without branches (the test of TestAabbAgainstAabb2: boxes that touch meet)
+    for (int k = 0; k < 6; ++k) sc.fb[k].resize(nf);
+    for (size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        sc.fb[k][f] = found.lo[f][k];
+        sc.fb[3 + k][f] = found.hi[f][k];
+      }
+    const double *flx = sc.fb[0].data(), *fly = sc.fb[1].data(), *flz = sc.fb[2].data(),
+                 *fhx = sc.fb[3].data(), *fhy = sc.fb[4].data(), *fhz = sc.fb[5].data();
+    std::vector<int> &meets = sc.meets;
+    meets.resize(nf + 1);
     for (size_t i = 0; i < nm; ++i) {
       Mover &m = movers[i];
       m.c0 = (int)cands.size();
       const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
       int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
-      const btVector3 &ml = mlo[i], &mh = mhi[i];
+      const double mlx = mlo[i].x(), mly = mlo[i].y(), mlz = mlo[i].z();
+      const double mhx = mhi[i].x(), mhy = mhi[i].y(), mhz = mhi[i].z();
+      int *out = meets.data();
+      size_t k = 0;
       for (size_t f = 0; f < nf; ++f) {
-        if (!TestAabbAgainstAabb2(ml, mh, found.lo[f], found.hi[f])) continue;
+        out[k] = (int)f;
+        k += !(mlx > fhx[f]) & !(mhx < flx[f]) & !(mly > fhy[f]) & !(mhy < fly[f]) &
+             !(mlz > fhz[f]) & !(mhz < flz[f]);
+      }
+      for (size_t q = 0; q < k; ++q) {
+        size_t f = out[q];
         const std::array<int, 4> &id = found.id[f];
         if (!(id[2] & mask) || !(group & id[3])) continue;
         if (ignored(m, id[0], id[1])) continue;
@@ -443,16 +470,25 @@ struct Sweep {
     return false;
   }
 
+  // The link poses (those NEEDED) for BASE and joint values Q, into OUT: the robot's own when
+  // it stands so (the same computation made them), else computed.
+  void end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out) {
+    if (base == robot->base && q == robot->q && robot->link_pose.size() == robot->model->links.size()) {
+      out = robot->link_pose;
+      return;
+    }
+    compute_link_poses(*robot->model, base, q, out, &needed);
+  }
+
   void run(double max_step) {
     // the boxes of what the movers may meet; the robot's and the carried objects' own boxes
     // are not read (they are left out of the candidates)
     sync_aabbs_except(w, [&](int ob) { return (robot && ob == robot->id) || moving(ob); });
-    std::vector<btTransform> lp0, lp1;
+    std::vector<btTransform> &lp0 = sc.lp0, &lp1 = sc.lp1;
     if (robot) {  // the poses at the ends of the links the movers hang from
       mark_needed([](const Mover &m) { return m.frame_link; });
-      const Model &md = *robot->model;
-      compute_link_poses(md, base0, q0, lp0, &needed);
-      compute_link_poses(md, base1, q1, lp1, &needed);
+      end_link_poses(base0, q0, lp0);
+      end_link_poses(base1, q1, lp1);
     }
     bound_movers(lp0, lp1);
     // movers that do not move meet nothing they did not touch already
@@ -499,11 +535,11 @@ struct Sweep {
 
   // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
   int levels = 0, n = 1;
-  std::vector<int> point_slot;               // sub-step point k -> its slot (-1: none yet)
+  std::vector<int> &point_slot = sc.point_slot;  // sub-step point k -> its slot (-1: none yet)
   int n_slots = 0;
-  std::vector<btTransform> slot_pose;        // per slot, one pose per mover
-  std::vector<btVector3> slot_lo, slot_hi;   // per slot, one box per mover
-  std::vector<std::vector<int>> pool;        // candidate lists per depth
+  std::vector<btTransform> &slot_pose = sc.slot_pose;  // per slot, one pose per mover
+  std::vector<btVector3> &slot_lo = sc.slot_lo, &slot_hi = sc.slot_hi;  // per slot, one box per mover
+  std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
 
   // The slot of the movers' poses and boxes at time k / n (computed once).
   int slot(int k) {

@@ -113,6 +113,22 @@ struct Hit {
   }
 };
 
+// The working arrays of the sweeps of one thread, kept from one call to the next so that a
+// check does not allocate them afresh (each use sets the size it needs and every entry it reads).
+struct Scratch {
+  std::vector<char> needed;
+  std::vector<btTransform> lp, lp0, lp1, slot_pose;
+  std::vector<const btCollisionObject *> cands, found;
+  std::vector<btVector3> cand_lo, cand_hi, found_lo, found_hi, mlo, mhi, slot_lo, slot_hi;
+  std::vector<std::array<int, 4>> found_id;
+  std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
+  std::vector<int> meets;     // the found boxes one move box meets
+  std::vector<char> done;
+  std::vector<double> clear_until;
+  std::vector<int> point_slot;
+  std::vector<std::vector<int>> pool;
+};
+
 // Bullet's bounding radius of a shape about its frame origin (from its local box).
 inline double shape_radius(const btCollisionShape *s) {
   btVector3 lo, hi;
