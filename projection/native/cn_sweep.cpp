@@ -401,7 +401,10 @@ struct Sweep {
     double h = tb - ta;
     double path = h * m.B;
     if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
-    if (std::isnan(da)) da = distance_at(m, pa, path + tol, other, &point);
+    if (std::isnan(da))
+      da = distance_at(m, pa, path + tol, other, &point);
+    else if (da <= 0)  // found by the interval before, which did not ask for the point
+      distance_at(m, pa, path + tol, other, &point);
     if (da <= 0) return ta;
     if (da > path) return -1;
     if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
@@ -631,7 +634,7 @@ struct Sweep {
         if (tb <= clear_until[c]) continue;
         known = d;
       }
-      btVector3 point;
+      btVector3 point(0, 0, 0);
       double db = NAN;
       double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
       if (t < 0) continue;
