@@ -88,10 +88,7 @@ struct Sweep {
   // the movers' candidates, side by side (Mover::c0, nc): the bodies, their broadphase boxes,
   // whether a pair is done (reported, or left out as a start contact) and the time before
   // which it cannot be reached
-  std::vector<const btCollisionObject *> &cands = sc.cands;
-  std::vector<btVector3> &cand_lo = sc.cand_lo, &cand_hi = sc.cand_hi;
-  std::vector<char> &done = sc.done;
-  std::vector<double> &clear_until = sc.clear_until;
+  std::vector<Cand> &cand = sc.cand;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
   std::vector<int> moving_ids;                           // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
@@ -309,9 +306,7 @@ struct Sweep {
     found.s = this;
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
     size_t nf = found.out.size();
-    cands.clear();
-    cand_lo.clear();
-    cand_hi.clear();
+    cand.clear();
     // the boxes by coordinate, so that one move box is tested against all of them in a loop
     // without branches (the test of TestAabbAgainstAabb2: boxes that touch meet)
     for (int k = 0; k < 6; ++k) sc.fb[k].resize(nf);
@@ -326,7 +321,7 @@ struct Sweep {
     meets.resize(nf + 1);
     for (size_t i = 0; i < nm; ++i) {
       Mover &m = movers[i];
-      m.c0 = (int)cands.size();
+      m.c0 = (int)cand.size();
       const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
       int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
       const double mlx = mlo[i].x(), mly = mlo[i].y(), mlz = mlo[i].z();
@@ -343,14 +338,18 @@ struct Sweep {
         const std::array<int, 4> &id = found.id[f];
         if (!(id[2] & mask) || !(group & id[3])) continue;
         if (ignored(m, id[0], id[1])) continue;
-        cands.push_back(found.out[f]);
-        cand_lo.push_back(found.lo[f]);
-        cand_hi.push_back(found.hi[f]);
+        cand.emplace_back();
+        Cand &x = cand.back();
+        for (int k = 0; k < 3; ++k) {
+          x.lo[k] = found.lo[f][k];
+          x.hi[k] = found.hi[f][k];
+        }
+        x.clear_until = 0;
+        x.found = (int)f;
+        x.done = 0;
       }
-      m.nc = (int)cands.size() - m.c0;
+      m.nc = (int)cand.size() - m.c0;
     }
-    done.assign(cands.size(), 0);
-    clear_until.assign(cands.size(), 0);
   }
 
   bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
@@ -585,8 +584,9 @@ struct Sweep {
     std::vector<int> &keep = pool[depth + 1];
     keep.clear();
     for (int c : pool[depth]) {
-      if (done[c] || tb <= clear_until[c]) continue;
-      if (TestAabbAgainstAabb2(lo, hi, cand_lo[c], cand_hi[c])) keep.push_back(c);
+      const Cand &x = cand[c];
+      if (x.done || tb <= x.clear_until) continue;
+      if (x.meets(lo, hi)) keep.push_back(c);
     }
     if (keep.empty()) return;
     if (kb - ka == 8) {
@@ -594,10 +594,10 @@ struct Sweep {
       // (everything before ta is clear already: the pair is clear up to tb)
       keep.erase(std::remove_if(keep.begin(), keep.end(),
                                 [&](int c) {
-                                  if (ta < clear_until[c] ||
-                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, cands[c]))
+                                  if (ta < cand[c].clear_until ||
+                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, sc.found[cand[c].found]))
                                     return false;
-                                  clear_until[c] = tb;
+                                  cand[c].clear_until = tb;
                                   return true;
                                 }),
                  keep.end());
@@ -610,35 +610,36 @@ struct Sweep {
       return;
     }
     for (int c : keep) {
-      if (done[c] || tb <= clear_until[c]) continue;
-      const btCollisionObject *other = cands[c];
+      Cand &x = cand[c];
+      if (x.done || tb <= x.clear_until) continue;
+      const btCollisionObject *other = sc.found[x.found];
       double known = NAN;
       // conservative advancement: no point of the mover moves faster than B, so a pair
       // apart by d at ta stays apart until ta + d / B
-      if (ta >= clear_until[c]) {
+      if (ta >= x.clear_until) {
         double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
         btVector3 at_point;
         double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
         if (ka == 0 && skip_start && d <= tol) {
-          done[c] = 1;
+          x.done = 1;
           continue;
         }
         if (d <= 0) {  // touching at ta
-          done[c] = 1;
+          x.done = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
           hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
           continue;
         }
-        clear_until[c] = ta + d / m.B;
-        if (tb <= clear_until[c]) continue;
+        x.clear_until = ta + d / m.B;
+        if (tb <= x.clear_until) continue;
         known = d;
       }
       btVector3 point(0, 0, 0);
       double db = NAN;
       double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
       if (t < 0) continue;
-      done[c] = 1;
+      x.done = 1;
       int ob, lb;
       decode_rb(other, ob, lb);
       hits.push_back({m.obj, m.link, ob, lb, t, point});

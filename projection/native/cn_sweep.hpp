@@ -113,18 +113,31 @@ struct Hit {
   }
 };
 
+// A body a mover may meet, with what the sweep knows of the pair, in one place (the tests of
+// the time hierarchy read them together).
+struct Cand {
+  double lo[3], hi[3];  // the body's broadphase box
+  double clear_until;   // the pair cannot touch before this time
+  int found;            // the body: entry of Scratch::found
+  char done;            // reported, or left out as a start contact
+  // whether the box LO HI meets the body's (TestAabbAgainstAabb2: touching boxes meet)
+  bool meets(const btVector3 &l, const btVector3 &h) const {
+    return !(l.x() > hi[0] || h.x() < lo[0]) && !(l.y() > hi[1] || h.y() < lo[1]) &&
+           !(l.z() > hi[2] || h.z() < lo[2]);
+  }
+};
+
 // The working arrays of the sweeps of one thread, kept from one call to the next so that a
 // check does not allocate them afresh (each use sets the size it needs and every entry it reads).
 struct Scratch {
   std::vector<char> needed;
   std::vector<btTransform> lp, lp0, lp1, slot_pose;
-  std::vector<const btCollisionObject *> cands, found;
-  std::vector<btVector3> cand_lo, cand_hi, found_lo, found_hi, mlo, mhi, slot_lo, slot_hi;
+  std::vector<const btCollisionObject *> found;
+  std::vector<btVector3> found_lo, found_hi, mlo, mhi, slot_lo, slot_hi;
+  std::vector<Cand> cand;
   std::vector<std::array<int, 4>> found_id;
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
-  std::vector<char> done;
-  std::vector<double> clear_until;
   std::vector<int> point_slot;
   std::vector<std::vector<int>> pool;
 };
