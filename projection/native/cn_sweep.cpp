@@ -200,6 +200,8 @@ struct Sweep {
       double reach = m.radius;
       double W = angle, B = dtrans;
       btVector3 p0 = o0, p1 = o1;
+      int k0 = first_changing(*m.chain);
+      m.pivot_r = -1;
       for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
         int j = (*m.chain)[k];
         int child = robot->model->joints[j].child;
@@ -207,6 +209,10 @@ struct Sweep {
         reach += std::max((p0 - c0).length(), (p1 - c1).length());
         p0 = c0;
         p1 = c1;
+        if (k == k0) {
+          m.pivot = c0;
+          m.pivot_r = reach + 1e-6;  // and a margin for the rounding of the poses along the way
+        }
         double d = std::fabs(dv[j]);
         if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
           B += d;
@@ -220,6 +226,21 @@ struct Sweep {
       m.W = W;
       m.B = B;
     }
+  }
+
+  // The first joint on CHAIN whose value changes in this move (its own value or the one it
+  // mimics differs between the ends), when the base stays and that joint is revolute: its origin
+  // does not move. -1 otherwise.
+  int first_changing(const std::vector<int> &chain) const {
+    if (!robot || base_moves) return -1;
+    const Model &md = *robot->model;
+    for (size_t k = 0; k < chain.size(); ++k) {
+      const JointM &jm = md.joints[chain[k]];
+      int src = jm.mimic >= 0 ? jm.mimic : chain[k];
+      if (q0[src] == q1[src]) continue;
+      return jm.type == CN_JOINT_REVOLUTE || jm.type == CN_JOINT_CONTINUOUS ? (int)k : -1;
+    }
+    return -1;
   }
 
   // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
@@ -275,6 +296,11 @@ struct Sweep {
       btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
       btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
       move_box(m, a, b, mlo[i], mhi[i]);
+      if (m.pivot_r >= 0) {  // the mover stays within pivot_r of its pivot
+        btVector3 r(m.pivot_r, m.pivot_r, m.pivot_r);
+        mlo[i].setMax(m.pivot - r);
+        mhi[i].setMin(m.pivot + r);
+      }
       lo.setMin(mlo[i]);
       hi.setMax(mhi[i]);
     }
