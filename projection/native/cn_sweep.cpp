@@ -192,6 +192,9 @@ struct Sweep {
   // and convex in the value of a prismatic one, so its larger end value bounds it.
   void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
     double dtrans = (base1.getOrigin() - base0.getOrigin()).length();
+    // a robot turning on the spot about the vertical, its joints kept
+    bool turn_in_place = robot && base0.getOrigin() == base1.getOrigin() && rot0.x() == 0 &&
+                         rot0.y() == 0 && rot1.x() == 0 && rot1.y() == 0 && q0 == q1;
     for (Mover &m : movers) {
       btVector3 o0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel.getOrigin();
       btVector3 o1 = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel.getOrigin();
@@ -201,7 +204,7 @@ struct Sweep {
       double W = angle, B = dtrans;
       btVector3 p0 = o0, p1 = o1;
       int k0 = first_changing(*m.chain);
-      m.pivot_r = -1;
+      m.bounded = false;
       for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
         int j = (*m.chain)[k];
         int child = robot->model->joints[j].child;
@@ -209,9 +212,11 @@ struct Sweep {
         reach += std::max((p0 - c0).length(), (p1 - c1).length());
         p0 = c0;
         p1 = c1;
-        if (k == k0) {
-          m.pivot = c0;
-          m.pivot_r = reach + 1e-6;  // and a margin for the rounding of the poses along the way
+        if (k == k0) {  // this joint's origin stays put: the mover stays within reach of it
+          double r = reach + 1e-6;   // and a margin for the rounding of the poses along the way
+          m.bounded = true;
+          m.bound_lo = c0 - btVector3(r, r, r);
+          m.bound_hi = c0 + btVector3(r, r, r);
         }
         double d = std::fabs(dv[j]);
         if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
@@ -223,6 +228,14 @@ struct Sweep {
       }
       reach += std::max((p0 - base0.getOrigin()).length(), (p1 - base1.getOrigin()).length());
       B += angle * reach;
+      if (turn_in_place) {  // the mover's origin circles the base's vertical axis at its height
+        const btVector3 &b = base0.getOrigin();
+        double rho = std::sqrt((o0.x() - b.x()) * (o0.x() - b.x()) + (o0.y() - b.y()) * (o0.y() - b.y()));
+        double h = rho + m.radius + 1e-6, v = m.radius + 1e-6;
+        m.bounded = true;
+        m.bound_lo = btVector3(b.x() - h, b.y() - h, o0.z() - v);
+        m.bound_hi = btVector3(b.x() + h, b.y() + h, o0.z() + v);
+      }
       m.W = W;
       m.B = B;
     }
@@ -296,10 +309,9 @@ struct Sweep {
       btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
       btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
       move_box(m, a, b, mlo[i], mhi[i]);
-      if (m.pivot_r >= 0) {  // the mover stays within pivot_r of its pivot
-        btVector3 r(m.pivot_r, m.pivot_r, m.pivot_r);
-        mlo[i].setMax(m.pivot - r);
-        mhi[i].setMin(m.pivot + r);
+      if (m.bounded) {
+        mlo[i].setMax(m.bound_lo);
+        mhi[i].setMin(m.bound_hi);
       }
       lo.setMin(mlo[i]);
       hi.setMax(mhi[i]);

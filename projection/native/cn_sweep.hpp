@@ -100,11 +100,10 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
-  // with the base still: the origin of the first revolute joint on the chain that changes
-  // (nothing before it does, so it stays put) and a bound on the distance from it to any point
-  // of the mover during the move (pivot_r < 0: none)
-  btVector3 pivot{0, 0, 0};
-  double pivot_r = -1;
+  // a box the mover stays in during the whole move, when one is known that is tighter than
+  // its path bound (see Sweep::bound_movers)
+  bool bounded = false;
+  btVector3 bound_lo{0, 0, 0}, bound_hi{0, 0, 0};
   int c0 = 0, nc = 0;              // its candidates: entries c0 .. c0 + nc - 1 of the sweep's
 };
 
