@@ -418,3 +418,36 @@ pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
       (is (= 0 missed))
       (is (= 0 false-alarms))
       (is (< 5 with-contact 38) "~d of ~d moves touch" with-contact moves))))
+
+(test contact-points-lie-on-what-is-hit
+  ;; seeded right-arm moves of the PR2 at the kitchen table, each also with a base turn: the point
+  ;; of every record is where the pair touches, on the body hit (within its box grown by 5 cm,
+  ;; as contacts count within the shapes' margins); a point left over from another computation
+  ;; (the robot's base, another candidate's contact) lies elsewhere
+  (with-open-world (:kitchen t)
+    (let* ((state (sb-ext:seed-random-state 31))
+           (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (floor (btr:object-handle (btr:object btr:*current-bullet-world* :floor)))
+           (records 0) (off '()))
+      (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.8547d0 -0.381d0 0)
+                                                        (cl-transforms:axis-angle->quaternion
+                                                         (cl-transforms:make-3d-vector 0 0 1) (/ pi -2))))
+      (let ((base (cram-native:object-pose w r)))
+        (dotimes (k 150)
+          (let ((qa (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+                (qb (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+                (turned (let ((v (copy-seq base)) (yaw (- (* 0.04d0 k) 3d0)))
+                          (setf (aref v 3) 0d0 (aref v 4) 0d0 (aref v 5) (sin (/ yaw 2)) (aref v 6) (cos (/ yaw 2)))
+                          v)))
+            (dolist (ends (list (list base qa base qb) (list base qa turned qa)))
+              (dolist (record (apply #'cram-native:robot-sweep-check w r
+                                     (append ends (list :ignore (list (list -1 -1 floor -1))))))
+                (destructuring-bind (mo ml ho hl fraction point) record
+                  (declare (ignore mo ml fraction))
+                  (incf records)
+                  (let ((box (cram-native:object-aabb w ho hl)))
+                    (unless (loop for i below 3
+                                  always (<= (- (aref box i) 0.05d0) (aref point i) (+ (aref box (+ i 3)) 0.05d0)))
+                      (push record off)))))))))
+      (is (< 100 records) "~d records" records)
+      (is (null off) "~d of ~d contact points off the body hit, e.g. ~s" (length off) records (subseq off 0 (min 6 (length off)))))))

@@ -66,15 +66,21 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
   return fresh;
 }
 
+Scratch &scratch() {
+  static thread_local Scratch s;
+  return s;
+}
+
 struct Sweep {
   World &w;
+  Scratch &sc = scratch();
   const Object *robot = nullptr;            // null for a body sweep
   btTransform base0, base1;
   btQuaternion rot0, rot1;
   double angle = 0;                          // base rotation over the move
   std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
-  std::vector<char> needed;
-  std::vector<btTransform> lp;               // link poses at the time asked last
+  std::vector<char> &needed = sc.needed;
+  std::vector<btTransform> &lp = sc.lp;      // link poses at the time asked last
   std::vector<Mover> movers;
   std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
   std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
@@ -82,10 +88,7 @@ struct Sweep {
   // the movers' candidates, side by side (Mover::c0, nc): the bodies, their broadphase boxes,
   // whether a pair is done (reported, or left out as a start contact) and the time before
   // which it cannot be reached
-  std::vector<const btCollisionObject *> cands;
-  std::vector<btVector3> cand_lo, cand_hi;
-  std::vector<char> done;
-  std::vector<double> clear_until;
+  std::vector<Cand> &cand = sc.cand;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
   std::vector<int> moving_ids;                           // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
@@ -189,6 +192,9 @@ struct Sweep {
   // and convex in the value of a prismatic one, so its larger end value bounds it.
   void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
     double dtrans = (base1.getOrigin() - base0.getOrigin()).length();
+    // a robot turning on the spot about the vertical, its joints kept
+    bool turn_in_place = robot && base0.getOrigin() == base1.getOrigin() && rot0.x() == 0 &&
+                         rot0.y() == 0 && rot1.x() == 0 && rot1.y() == 0 && q0 == q1;
     for (Mover &m : movers) {
       btVector3 o0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel.getOrigin();
       btVector3 o1 = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel.getOrigin();
@@ -197,6 +203,8 @@ struct Sweep {
       double reach = m.radius;
       double W = angle, B = dtrans;
       btVector3 p0 = o0, p1 = o1;
+      int k0 = first_changing(*m.chain);
+      m.bounded = false;
       for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
         int j = (*m.chain)[k];
         int child = robot->model->joints[j].child;
@@ -204,6 +212,12 @@ struct Sweep {
         reach += std::max((p0 - c0).length(), (p1 - c1).length());
         p0 = c0;
         p1 = c1;
+        if (k == k0) {  // this joint's origin stays put: the mover stays within reach of it
+          double r = reach + 1e-6;   // and a margin for the rounding of the poses along the way
+          m.bounded = true;
+          m.bound_lo = c0 - btVector3(r, r, r);
+          m.bound_hi = c0 + btVector3(r, r, r);
+        }
         double d = std::fabs(dv[j]);
         if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
           B += d;
@@ -214,9 +228,32 @@ struct Sweep {
       }
       reach += std::max((p0 - base0.getOrigin()).length(), (p1 - base1.getOrigin()).length());
       B += angle * reach;
+      if (turn_in_place) {  // the mover's origin circles the base's vertical axis at its height
+        const btVector3 &b = base0.getOrigin();
+        double rho = std::sqrt((o0.x() - b.x()) * (o0.x() - b.x()) + (o0.y() - b.y()) * (o0.y() - b.y()));
+        double h = rho + m.radius + 1e-6, v = m.radius + 1e-6;
+        m.bounded = true;
+        m.bound_lo = btVector3(b.x() - h, b.y() - h, o0.z() - v);
+        m.bound_hi = btVector3(b.x() + h, b.y() + h, o0.z() + v);
+      }
       m.W = W;
       m.B = B;
     }
+  }
+
+  // The first joint on CHAIN whose value changes in this move (its own value or the one it
+  // mimics differs between the ends), when the base stays and that joint is revolute: its origin
+  // does not move. -1 otherwise.
+  int first_changing(const std::vector<int> &chain) const {
+    if (!robot || base_moves) return -1;
+    const Model &md = *robot->model;
+    for (size_t k = 0; k < chain.size(); ++k) {
+      const JointM &jm = md.joints[chain[k]];
+      int src = jm.mimic >= 0 ? jm.mimic : chain[k];
+      if (q0[src] == q1[src]) continue;
+      return jm.type == CN_JOINT_REVOLUTE || jm.type == CN_JOINT_CONTINUOUS ? (int)k : -1;
+    }
+    return -1;
   }
 
   // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
@@ -263,22 +300,34 @@ struct Sweep {
   // ignored) whose boxes meet its move box, from one broadphase query of all the move boxes.
   void gather_candidates(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1) {
     size_t nm = movers.size();
-    std::vector<btVector3> mlo(nm), mhi(nm);
+    std::vector<btVector3> &mlo = sc.mlo, &mhi = sc.mhi;
+    mlo.resize(nm);
+    mhi.resize(nm);
     btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
     for (size_t i = 0; i < nm; ++i) {
       const Mover &m = movers[i];
       btTransform a = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
       btTransform b = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel;
       move_box(m, a, b, mlo[i], mhi[i]);
+      if (m.bounded) {
+        mlo[i].setMax(m.bound_lo);
+        mhi[i].setMin(m.bound_hi);
+      }
       lo.setMin(mlo[i]);
       hi.setMax(mhi[i]);
     }
     // the bodies in the union of the move boxes, their boxes side by side for the tests below
     struct Found : btBroadphaseAabbCallback {
       const Sweep *s;
-      std::vector<const btCollisionObject *> out;
-      std::vector<btVector3> lo, hi;
-      std::vector<std::array<int, 4>> id;  // object, link, filter group, filter mask
+      std::vector<const btCollisionObject *> &out;
+      std::vector<btVector3> &lo, &hi;
+      std::vector<std::array<int, 4>> &id;  // object, link, filter group, filter mask
+      Found(Scratch &sc) : out(sc.found), lo(sc.found_lo), hi(sc.found_hi), id(sc.found_id) {
+        out.clear();
+        lo.clear();
+        hi.clear();
+        id.clear();
+      }
       bool process(const btBroadphaseProxy *bp) override {
         auto *co = static_cast<const btCollisionObject *>(bp->m_clientObject);
         int ob, lb;
@@ -291,39 +340,54 @@ struct Sweep {
         id.push_back({ob, lb, bp->m_collisionFilterGroup, bp->m_collisionFilterMask});
         return true;
       }
-    } found;
+    } found(sc);
     found.s = this;
-    found.out.reserve(256);
-    found.lo.reserve(256);
-    found.hi.reserve(256);
-    found.id.reserve(256);
     w.dw->getBroadphase()->aabbTest(lo, hi, found);
     size_t nf = found.out.size();
-    cands.clear();
-    cand_lo.clear();
-    cand_hi.clear();
-    cands.reserve(4 * nf);
-    cand_lo.reserve(4 * nf);
-    cand_hi.reserve(4 * nf);
+    cand.clear();
+    // the boxes by coordinate, so that one move box is tested against all of them in a loop
+    // without branches (the test of TestAabbAgainstAabb2: boxes that touch meet)
+    for (int k = 0; k < 6; ++k) sc.fb[k].resize(nf);
+    for (size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        sc.fb[k][f] = found.lo[f][k];
+        sc.fb[3 + k][f] = found.hi[f][k];
+      }
+    const double *flx = sc.fb[0].data(), *fly = sc.fb[1].data(), *flz = sc.fb[2].data(),
+                 *fhx = sc.fb[3].data(), *fhy = sc.fb[4].data(), *fhz = sc.fb[5].data();
+    std::vector<int> &meets = sc.meets;
+    meets.resize(nf + 1);
     for (size_t i = 0; i < nm; ++i) {
       Mover &m = movers[i];
-      m.c0 = (int)cands.size();
+      m.c0 = (int)cand.size();
       const btBroadphaseProxy *mine = m.co->getBroadphaseHandle();
       int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
-      const btVector3 &ml = mlo[i], &mh = mhi[i];
+      const double mlx = mlo[i].x(), mly = mlo[i].y(), mlz = mlo[i].z();
+      const double mhx = mhi[i].x(), mhy = mhi[i].y(), mhz = mhi[i].z();
+      int *out = meets.data();
+      size_t k = 0;
       for (size_t f = 0; f < nf; ++f) {
-        if (!TestAabbAgainstAabb2(ml, mh, found.lo[f], found.hi[f])) continue;
+        out[k] = (int)f;
+        k += !(mlx > fhx[f]) & !(mhx < flx[f]) & !(mly > fhy[f]) & !(mhy < fly[f]) &
+             !(mlz > fhz[f]) & !(mhz < flz[f]);
+      }
+      for (size_t q = 0; q < k; ++q) {
+        size_t f = out[q];
         const std::array<int, 4> &id = found.id[f];
         if (!(id[2] & mask) || !(group & id[3])) continue;
         if (ignored(m, id[0], id[1])) continue;
-        cands.push_back(found.out[f]);
-        cand_lo.push_back(found.lo[f]);
-        cand_hi.push_back(found.hi[f]);
+        cand.emplace_back();
+        Cand &x = cand.back();
+        for (int k = 0; k < 3; ++k) {
+          x.lo[k] = found.lo[f][k];
+          x.hi[k] = found.hi[f][k];
+        }
+        x.clear_until = 0;
+        x.found = (int)f;
+        x.done = 0;
       }
-      m.nc = (int)cands.size() - m.c0;
+      m.nc = (int)cand.size() - m.c0;
     }
-    done.assign(cands.size(), 0);
-    clear_until.assign(cands.size(), 0);
   }
 
   bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
@@ -374,7 +438,10 @@ struct Sweep {
     double h = tb - ta;
     double path = h * m.B;
     if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
-    if (std::isnan(da)) da = distance_at(m, pa, path + tol, other, &point);
+    if (std::isnan(da))
+      da = distance_at(m, pa, path + tol, other, &point);
+    else if (da <= 0)  // found by the interval before, which did not ask for the point
+      distance_at(m, pa, path + tol, other, &point);
     if (da <= 0) return ta;
     if (da > path) return -1;
     if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
@@ -443,16 +510,25 @@ struct Sweep {
     return false;
   }
 
+  // The link poses (those NEEDED) for BASE and joint values Q, into OUT: the robot's own when
+  // it stands so (the same computation made them), else computed.
+  void end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out) {
+    if (base == robot->base && q == robot->q && robot->link_pose.size() == robot->model->links.size()) {
+      out = robot->link_pose;
+      return;
+    }
+    compute_link_poses(*robot->model, base, q, out, &needed);
+  }
+
   void run(double max_step) {
     // the boxes of what the movers may meet; the robot's and the carried objects' own boxes
     // are not read (they are left out of the candidates)
     sync_aabbs_except(w, [&](int ob) { return (robot && ob == robot->id) || moving(ob); });
-    std::vector<btTransform> lp0, lp1;
+    std::vector<btTransform> &lp0 = sc.lp0, &lp1 = sc.lp1;
     if (robot) {  // the poses at the ends of the links the movers hang from
       mark_needed([](const Mover &m) { return m.frame_link; });
-      const Model &md = *robot->model;
-      compute_link_poses(md, base0, q0, lp0, &needed);
-      compute_link_poses(md, base1, q1, lp1, &needed);
+      end_link_poses(base0, q0, lp0);
+      end_link_poses(base1, q1, lp1);
     }
     bound_movers(lp0, lp1);
     // movers that do not move meet nothing they did not touch already
@@ -499,11 +575,11 @@ struct Sweep {
 
   // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
   int levels = 0, n = 1;
-  std::vector<int> point_slot;               // sub-step point k -> its slot (-1: none yet)
+  std::vector<int> &point_slot = sc.point_slot;  // sub-step point k -> its slot (-1: none yet)
   int n_slots = 0;
-  std::vector<btTransform> slot_pose;        // per slot, one pose per mover
-  std::vector<btVector3> slot_lo, slot_hi;   // per slot, one box per mover
-  std::vector<std::vector<int>> pool;        // candidate lists per depth
+  std::vector<btTransform> &slot_pose = sc.slot_pose;  // per slot, one pose per mover
+  std::vector<btVector3> &slot_lo = sc.slot_lo, &slot_hi = sc.slot_hi;  // per slot, one box per mover
+  std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
 
   // The slot of the movers' poses and boxes at time k / n (computed once).
   int slot(int k) {
@@ -546,8 +622,9 @@ struct Sweep {
     std::vector<int> &keep = pool[depth + 1];
     keep.clear();
     for (int c : pool[depth]) {
-      if (done[c] || tb <= clear_until[c]) continue;
-      if (TestAabbAgainstAabb2(lo, hi, cand_lo[c], cand_hi[c])) keep.push_back(c);
+      const Cand &x = cand[c];
+      if (x.done || tb <= x.clear_until) continue;
+      if (x.meets(lo, hi)) keep.push_back(c);
     }
     if (keep.empty()) return;
     if (kb - ka == 8) {
@@ -555,10 +632,10 @@ struct Sweep {
       // (everything before ta is clear already: the pair is clear up to tb)
       keep.erase(std::remove_if(keep.begin(), keep.end(),
                                 [&](int c) {
-                                  if (ta < clear_until[c] ||
-                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, cands[c]))
+                                  if (ta < cand[c].clear_until ||
+                                      hull_touches(m, slot_pose[a], slot_pose[b], grow, sc.found[cand[c].found]))
                                     return false;
-                                  clear_until[c] = tb;
+                                  cand[c].clear_until = tb;
                                   return true;
                                 }),
                  keep.end());
@@ -571,35 +648,36 @@ struct Sweep {
       return;
     }
     for (int c : keep) {
-      if (done[c] || tb <= clear_until[c]) continue;
-      const btCollisionObject *other = cands[c];
+      Cand &x = cand[c];
+      if (x.done || tb <= x.clear_until) continue;
+      const btCollisionObject *other = sc.found[x.found];
       double known = NAN;
       // conservative advancement: no point of the mover moves faster than B, so a pair
       // apart by d at ta stays apart until ta + d / B
-      if (ta >= clear_until[c]) {
+      if (ta >= x.clear_until) {
         double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
         btVector3 at_point;
         double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
         if (ka == 0 && skip_start && d <= tol) {
-          done[c] = 1;
+          x.done = 1;
           continue;
         }
         if (d <= 0) {  // touching at ta
-          done[c] = 1;
+          x.done = 1;
           int ob, lb;
           decode_rb(other, ob, lb);
           hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
           continue;
         }
-        clear_until[c] = ta + d / m.B;
-        if (tb <= clear_until[c]) continue;
+        x.clear_until = ta + d / m.B;
+        if (tb <= x.clear_until) continue;
         known = d;
       }
-      btVector3 point;
+      btVector3 point(0, 0, 0);
       double db = NAN;
       double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
       if (t < 0) continue;
-      done[c] = 1;
+      x.done = 1;
       int ob, lb;
       decode_rb(other, ob, lb);
       hits.push_back({m.obj, m.link, ob, lb, t, point});

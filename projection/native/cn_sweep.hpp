@@ -100,6 +100,10 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
+  // a box the mover stays in during the whole move, when one is known that is tighter than
+  // its path bound (see Sweep::bound_movers)
+  bool bounded = false;
+  btVector3 bound_lo{0, 0, 0}, bound_hi{0, 0, 0};
   int c0 = 0, nc = 0;              // its candidates: entries c0 .. c0 + nc - 1 of the sweep's
 };
 
@@ -111,6 +115,35 @@ struct Hit {
     if (t != o.t) return t < o.t;
     return std::array<int, 4>{obj, link, hobj, hlink} < std::array<int, 4>{o.obj, o.link, o.hobj, o.hlink};
   }
+};
+
+// A body a mover may meet, with what the sweep knows of the pair, in one place (the tests of
+// the time hierarchy read them together).
+struct Cand {
+  double lo[3], hi[3];  // the body's broadphase box
+  double clear_until;   // the pair cannot touch before this time
+  int found;            // the body: entry of Scratch::found
+  char done;            // reported, or left out as a start contact
+  // whether the box LO HI meets the body's (TestAabbAgainstAabb2: touching boxes meet)
+  bool meets(const btVector3 &l, const btVector3 &h) const {
+    return !(l.x() > hi[0] || h.x() < lo[0]) && !(l.y() > hi[1] || h.y() < lo[1]) &&
+           !(l.z() > hi[2] || h.z() < lo[2]);
+  }
+};
+
+// The working arrays of the sweeps of one thread, kept from one call to the next so that a
+// check does not allocate them afresh (each use sets the size it needs and every entry it reads).
+struct Scratch {
+  std::vector<char> needed;
+  std::vector<btTransform> lp, lp0, lp1, slot_pose;
+  std::vector<const btCollisionObject *> found;
+  std::vector<btVector3> found_lo, found_hi, mlo, mhi, slot_lo, slot_hi;
+  std::vector<Cand> cand;
+  std::vector<std::array<int, 4>> found_id;
+  std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
+  std::vector<int> meets;     // the found boxes one move box meets
+  std::vector<int> point_slot;
+  std::vector<std::vector<int>> pool;
 };
 
 // Bullet's bounding radius of a shape about its frame origin (from its local box).

@@ -59,8 +59,15 @@ it hits, and where on the way."
   (let ((w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot)))
     (cons (cram-native:object-pose w h) (cram-native:robot-joints w h))))
 
+(defun same-doubles-or-numbers-p (a b)
+  "True when the sequences A and B hold the same numbers (=); DVECs compared without generic
+arithmetic, as every motion's check compares its two states."
+  (if (and (typep a '(simple-array double-float (*))) (typep b '(simple-array double-float (*))))
+      (same-doubles-p a b)
+      (and (= (length a) (length b)) (every #'= a b))))
+
 (defun same-state-p (a b)
-  (and (every #'= (car a) (car b)) (every #'= (cdr a) (cdr b))))
+  (and (same-doubles-or-numbers-p (car a) (car b)) (same-doubles-or-numbers-p (cdr a) (cdr b))))
 
 (defun restore-robot-state (robot state)
   "Put ROBOT back to STATE (from ROBOT-STATE-VECTORS)."
