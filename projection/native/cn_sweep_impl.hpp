@@ -1,0 +1,159 @@
+// The state and steps of one sweep check (struct Sweep), shared by cn_sweep.cpp (the ends, the
+// movers and their bounds, run, the entry points) and cn_sweep_steps.cpp (candidates, the time
+// hierarchy, confirmation by distances). The method is described at the top of cn_sweep.cpp and
+// cn_sweep_steps.cpp.
+#pragma once
+#include "cn_sweep.hpp"
+
+namespace cn {
+namespace sweep {
+
+// The working arrays of the sweeps of this thread (cn_sweep.cpp).
+Scratch &scratch();
+
+struct Sweep {
+  World &w;
+  Scratch &sc = scratch();
+  const Object *robot = nullptr;            // null for a body sweep
+  btTransform base0, base1;
+  btQuaternion rot0, rot1;
+  double angle = 0;                          // base rotation over the move
+  std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
+  std::vector<char> &needed = sc.needed;
+  std::vector<btTransform> &lp = sc.lp;      // link poses at the time asked last
+  std::vector<Mover> movers;
+  std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
+  std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
+  std::vector<std::unique_ptr<std::vector<int>>> body_chains;    // chains of attached bodies
+  // the movers' candidates, side by side (Mover::c0, nc): the bodies, their broadphase boxes,
+  // whether a pair is done (reported, or left out as a start contact) and the time before
+  // which it cannot be reached
+  std::vector<Cand> &cand = sc.cand;
+  std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
+  std::vector<int> moving_ids;                           // the robot and what it carries
+  bool any_anchor = false;                               // some mover hangs from a moving joint
+
+  bool moving(int id) const {
+    return std::find(moving_ids.begin(), moving_ids.end(), id) != moving_ids.end();
+  }
+  const int *ignore4 = nullptr;
+  int n_ignore = 0;
+  double tol = 1e-3;
+  bool skip_start = false;
+  btCollisionObject probe;
+  SweptHull hull;
+  std::vector<Hit> hits;
+
+  Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
+      : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {}
+
+  void set_ends(const btTransform &a, const btTransform &b);
+
+  void set_base(const btTransform &a, const btTransform &b);
+
+  btTransform base_at(double t) const {
+    btQuaternion r = angle > 1e-12 ? rot0.slerp(rot1, t) : rot0;
+    return btTransform(r, base0.getOrigin().lerp(base1.getOrigin(), t));
+  }
+
+  // The frame of mover M at time T; the links the movers hang from (their anchors, see run)
+  // computed into lp, unless FK_DONE says they are for T already.
+  btTransform pose_at(const Mover &m, double t, bool fk_done = false) {
+    btTransform base = base_at(t);
+    if (m.anchor < 0) return base * m.rel_anchor;
+    if (!fk_done) fk(t, base);
+    return lp[m.anchor] * m.rel_anchor;
+  }
+
+  void fk(double t, const btTransform &base) {
+    for (size_t j = 0; j < qt.size(); ++j) qt[j] = q0[j] + t * (q1[j] - q0[j]);
+    compute_link_poses(*robot->model, base, qt, lp, &needed);
+  }
+
+  Mover &add_mover(int obj, int link, const btCollisionObject *co, int frame_link,
+                   const btTransform &rel, const std::vector<int> *chain,
+                   const std::vector<Piece> &pieces, double radius);
+
+  void add_body_mover(int obj, const btCollisionObject *co, int frame_link, const btTransform &rel,
+                      std::vector<int> chain);
+
+  void add_attached(int parent, int frame_link, const btTransform &rel, int depth);
+
+  void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1);
+
+  int first_changing(const std::vector<int> &chain) const;
+
+  // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
+  bool ignored_by_all(int hobj, int hlink) const {
+    for (int i = 0; i < n_ignore; ++i) {
+      const int *r = ignore4 + 4 * i;
+      if (r[0] == -1 && r[1] == -1 && (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
+        return true;
+    }
+    return false;
+  }
+
+  bool ignored(const Mover &m, int hobj, int hlink) const {
+    if (w.pair_ignored(m.obj, m.link, hobj, hlink)) return true;
+    for (int i = 0; i < n_ignore; ++i) {
+      const int *r = ignore4 + 4 * i;
+      if ((r[0] == -1 || r[0] == m.obj) && (r[1] == -1 || r[1] == m.link) &&
+          (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
+        return true;
+    }
+    return false;
+  }
+
+  void move_box(const Mover &m, const btTransform &t0, const btTransform &t1, btVector3 &lo,
+                btVector3 &hi) const;
+
+  void gather_candidates(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1);
+
+  bool hull_touches(const Mover &m, const btTransform &ta, const btTransform &tb, double grow,
+                    const btCollisionObject *other);
+
+  Closest distance(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other);
+
+  double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                     btVector3 *point = nullptr);
+
+  double confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
+                 double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
+                 int depth);
+
+  bool base_moves = false;
+
+  template <class F>
+  void mark_needed(F link_of);
+
+  void set_anchors(const std::vector<btTransform> &lp0);
+
+  void prepare();
+
+  bool chain_moves(const std::vector<int> &chain) const {
+    if (base_moves) return true;
+    for (int j : chain)
+      if (dv[j] != 0) return true;
+    return false;
+  }
+
+  void end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out);
+
+  void run(double max_step);
+
+  // ---- the time hierarchy: the move's n = 2^levels sub-steps, halved from the whole move
+  int levels = 0, n = 1;
+  std::vector<int> &point_slot = sc.point_slot;  // sub-step point k -> its slot (-1: none yet)
+  int n_slots = 0;
+  std::vector<btTransform> &slot_pose = sc.slot_pose;  // per slot, one pose per mover
+  std::vector<btVector3> &slot_lo = sc.slot_lo, &slot_hi = sc.slot_hi;  // per slot, one box per mover
+  std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
+
+  int slot(int k);
+
+  void descend(size_t i, int ka, int kb, int depth);
+};
+
+}  // namespace sweep
+}  // namespace cn
