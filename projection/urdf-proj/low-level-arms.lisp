@@ -65,6 +65,19 @@ MANIPULATION-GOAL-NOT-REACHED after moving. Returns the arm joint states."
 
 ;;; ---- grippers --------------------------------------------------------------------------------------
 
+(defun gripper-joint-states (arm action &optional (robot (robot-object)))
+  "The (joint value) pairs of ARM's gripper for ACTION: :OPEN the joints' upper limits, :CLOSE
+or :GRIP their lower limits, a real n (metres) n times the robot's gripper metre-to-joint
+multiplier, clamped to the limits."
+  (let ((multiplier (or (fact-value '?m `(rob-int:gripper-meter-to-joint-multiplier ,(robot-name) ?m)) 1)))
+    (mapcar (lambda (j)
+              (multiple-value-bind (lo hi) (btr:joint-limits robot j)
+                (list j (case action
+                          (:open hi)
+                          ((:close :grip) lo)
+                          (t (clamp-joint robot j (* action multiplier)))))))
+            (gripper-joints arm))))
+
 (defun gripper-action (action arm &optional maximum-effort)
   "Move the gripper of ARM: ACTION :OPEN (joints to their upper limits), :CLOSE or :GRIP (to
 their lower limits), or a real n (each joint to n × the gripper metre-to-joint multiplier,
@@ -74,17 +87,9 @@ signalled. MAXIMUM-EFFORT is accepted and has no effect in projection. Returns t
   (check-arm arm)
   (unless (or (member action '(:open :close :grip)) (and (realp action) (not (and (floatp action) (sb-ext:float-nan-p action))) (< (abs action) 1d6)))
     (projection-error "GRIPPER-ACTION: action ~s, expected :OPEN, :CLOSE, :GRIP or a real." action))
-  (let* ((robot (robot-object))
-         (joints (gripper-joints arm))
-         (multiplier (or (fact-value '?m `(rob-int:gripper-meter-to-joint-multiplier ,(robot-name) ?m)) 1)))
+  (let ((robot (robot-object)))
     (with-motion ("gripping")
-      (let ((pairs (mapcar (lambda (j)
-                             (multiple-value-bind (lo hi) (btr:joint-limits robot j)
-                               (list j (case action
-                                         (:open hi)
-                                         ((:close :grip) lo)
-                                         (t (clamp-joint robot j (* action multiplier)))))))
-                           joints)))
+      (let ((pairs (gripper-joint-states arm action robot)))
         (with-sweep-check ("gripping" :gripper :robot robot)
           (btr:set-robot-state-from-joints pairs robot))
         (when (eq action :grip)

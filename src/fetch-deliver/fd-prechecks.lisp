@@ -57,17 +57,12 @@ afterwards. Checked in the belief state."
   (if (null opening)
       (funcall thunk)
       (let* ((robot (btr:get-robot-object))
-             (joints (urdf-proj::gripper-joints arm))
-             (before (mapcar (lambda (j) (list j (btr:joint-state robot j))) joints))
-             (multiplier (or (urdf-proj::fact-value
-                              '?m `(rob-int:gripper-meter-to-joint-multiplier ,(robot-name) ?m))
-                             1)))
+             (before (mapcar (lambda (j) (list j (btr:joint-state robot j)))
+                             (urdf-proj::gripper-joints arm))))
         (unwind-protect
              (progn
                (btr:set-robot-state-from-joints
-                (mapcar (lambda (j) (list j (urdf-proj::clamp-joint robot j (* opening multiplier))))
-                        joints)
-                robot)
+                (urdf-proj::gripper-joint-states arm opening robot) robot)
                (funcall thunk))
           (btr:set-robot-state-from-joints before robot)))))
 
