@@ -26,6 +26,7 @@
 (defcn "cn_object_set_collision_filter" :int (w :int) (o :int) (group :int) (mask :int))
 (defcn "cn_object_get_collision_filter" :int (w :int) (o :int) (out :pointer))
 (defcn "cn_object_aabb" :int (w :int) (o :int) (link :int) (out :pointer))
+(defcn "cn_object_local_aabb" :int (w :int) (o :int) (link :int) (out :pointer))
 (defcn "cn_object_is_active" :int (w :int) (o :int))
 (defcn "cn_body_add_plane" :int (w :int) (nx :double) (ny :double) (nz :double) (c :double))
 (defcn "cn_body_add_box" :int (w :int) (pose :pointer) (sx :double) (sy :double) (sz :double)
@@ -208,6 +209,12 @@ each one's group intersects the other's mask."
   "Axis-aligned bounding box of OBJECT (or one LINK) as a DVEC min-x min-y min-z max-x max-y max-z."
   (with-out-dvec (v 6)
     (with-vector-pointers ((p v)) (ccall "cn_object_aabb" world object link p))))
+
+(defun object-local-aabb (world object &optional (link -1))
+  "The bounding box of OBJECT's shapes (or one LINK's) in its own frame, whatever its pose, as
+a DVEC min-x min-y min-z max-x max-y max-z."
+  (with-out-dvec (v 6)
+    (with-vector-pointers ((p v)) (ccall "cn_object_local_aabb" world object link p))))
 
 (defun object-active-p (world object)
   "True if a dynamic body of OBJECT is awake (still moving)."

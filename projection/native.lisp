@@ -15,7 +15,7 @@
    ;; objects and bodies
    #:object-kind #:remove-object #:object-pose #:set-object-pose #:object-poses
    #:set-object-poses #:object-color #:set-object-color #:object-collision-filter
-   #:set-object-collision-filter #:object-aabb #:object-active-p
+   #:set-object-collision-filter #:object-aabb #:object-local-aabb #:object-active-p
    #:add-plane #:add-box #:add-sphere #:add-cylinder #:add-cone #:add-mesh #:add-convex-hull
    #:body-velocity #:set-body-velocity #:body-mass #:body-shape
    ;; articulated objects

@@ -112,6 +112,37 @@
       (is (< (abs (- 0.14 (cl-transforms:z (cl-bullet:bounding-box-dimensions merged)))) 2d-3)))
     (signals error (cl-bullet:bounding-box-center 42))))
 
+(test local-aabb-is-the-box-in-the-objects-own-frame
+  (let* ((w (small-world)) (tray (btr:object w 'tray)))
+    (declare (ignorable w))
+    (btr:add-object w :box 'plank '((1 2 0.5) (0 0 0 1)) :size '(0.4 0.1 0.02))
+    (let ((plank (btr:object w 'plank)))
+      (flet ((sizes (lo hi) (mapcar (lambda (f) (- (funcall f hi) (funcall f lo)))
+                                    (list #'cl-transforms:x #'cl-transforms:y #'cl-transforms:z))))
+        ;; turned 45 degrees about z and tipped 90 degrees about x: the map box changes, the
+        ;; local one does not, and it is centred on the object's origin
+        (setf (btr:pose plank)
+              (cl-transforms:make-pose
+               (cl-transforms:make-3d-vector -1 0.5 1.2)
+               (cl-transforms:q* (cl-transforms:axis-angle->quaternion
+                                  (cl-transforms:make-3d-vector 0 0 1) (/ pi 4))
+                                 (cl-transforms:axis-angle->quaternion
+                                  (cl-transforms:make-3d-vector 1 0 0) (/ pi 2)))))
+        (multiple-value-bind (lo hi) (btr:local-aabb plank)
+          (destructuring-bind (sx sy sz) (sizes lo hi)
+            (is (< (abs (- sx 0.4)) 0.01) "x size ~a" sx)
+            (is (< (abs (- sy 0.1)) 0.01) "y size ~a" sy)
+            (is (< (abs (- sz 0.02)) 0.01) "z size ~a" sz))
+          (is (< (abs (+ (cl-transforms:x lo) (cl-transforms:x hi))) 1d-6)))
+        (multiple-value-bind (lo hi) (btr:aabb plank)
+          (is (> (third (sizes lo hi)) 0.09) "the map box stands up: ~a" (sizes lo hi))))
+      (signals error (btr:local-aabb 'plank))
+      (btr:remove-object w 'plank)
+      (signals error (btr:local-aabb plank))
+      (is (< (abs (- 0.04 (let ((lo-hi (multiple-value-list (btr:local-aabb tray))))
+                            (- (cl-transforms:z (second lo-hi)) (cl-transforms:z (first lo-hi))))))
+             0.01)))))
+
 (test robot-attached-objects-in-collision
   (let* ((w (small-world))
          (arm (btr:add-object w :urdf 'arm '((2 0 0.05) (0 0 0 1)) :urdf *arm-urdf*))

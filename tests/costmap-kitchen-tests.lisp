@@ -245,6 +245,33 @@
       (desig:reference c)
       (is (= 0 (costmap:get-map-value (costmap:designator-costmap c) -0.9 0.6))))))
 
+(test on-keeps-the-footprint-of-the-object-upright-however-it-is-held
+  ;; the free space around the items already on a surface is the object's own footprint
+  ;; upright, as it is put down: the same whether it now stands straight or hangs turned and
+  ;; tipped in a hand (its box in the map is then larger)
+  (in-kitchen
+    (let* ((mug (btr:object btr:*current-bullet-world* 'mug-1))
+           (upright (btr:pose mug)))
+      (flet ((free-cells ()
+               (let ((d (desig:a location (on (desig:an object (urdf-name kitchen-island-surface)
+                                                              (part-of iai-kitchen)))
+                                 (for (desig:an object (name mug-1))))))
+                 (desig:reference d)
+                 (let ((c (costmap:designator-costmap d)))
+                   (loop for x from -1.5d0 to -0.3d0 by 0.02d0
+                         sum (loop for y from 0.0d0 to 1.2d0 by 0.02d0
+                                   count (> (costmap:get-map-value c x y) 0)))))))
+        (let ((straight (free-cells)))
+          (setf (btr:pose mug)
+                (cl-transforms:make-pose
+                 (cl-transforms:v+ (cl-transforms:origin upright) (cl-transforms:make-3d-vector 0 0 0.5))
+                 (cl-transforms:q* (cl-transforms:axis-angle->quaternion
+                                    (cl-transforms:make-3d-vector 0 0 1) (/ pi 4))
+                                   (cl-transforms:axis-angle->quaternion
+                                    (cl-transforms:make-3d-vector 1 0 0) 0.5d0))))
+          (is (> straight 0))
+          (is (= straight (free-cells))))))))
+
 (test bad-designators-are-errors
   (in-kitchen
     (signals error (desig:reference (desig:a location (on (desig:an object (urdf-name no-such-surface)

@@ -419,3 +419,36 @@ sink behind it; either way the held object ends where it was, attached to the sa
                  'desig:object-designator)
           "the search found the bottle"))
     (is-true (fd-plans::location-certain-p location) "certain once it was perceived")))
+
+(test the-sample-the-navigation-check-accepted-is-tried-first
+  ;; navigating to deliver checks, at each base pose, whether the object can be put down at a
+  ;; sample of the target from there; the sample it found is the one the delivery tries first
+  ;; from that pose, once, instead of drawing new samples that may all fail
+  (fetched-at-island)
+  (let* ((target (poses-location *sink* *island*))
+         (object (desig:an object (type bottle) (name object-1)))
+         (arm (second (first (pp-plans::held-objects))))
+         (fd-plans::*placing-hint* (list nil))
+         hint again)
+    (run-plan (lambda ()
+                (fd-plans::navigate :location (poses-location *robot-at-island*)
+                                    :place (list object arm target))
+                (setf hint (fd-plans::take-placing-hint)
+                      again (fd-plans::take-placing-hint))))
+    (is-true hint "the check left the sample it accepted")
+    (is (null again) "a hint is used once")
+    (when hint
+      ;; the sink is out of reach from the island: the accepted sample is the island's
+      (is (< (cl-transforms:v-dist (cl-transforms:origin (pp-plans:pose-in-map hint))
+                                   (apply #'cl-transforms:make-3d-vector *island*))
+             0.05))
+      (multiple-value-bind (at hinted) (fd-plans::check-placing-collisions object arm target
+                                                                           :first hint)
+        (is-true hinted)
+        (is (< (cl-transforms:v-dist (cl-transforms:origin (pp-plans:pose-in-map (desig:reference at)))
+                                     (cl-transforms:origin (pp-plans:pose-in-map hint)))
+               1d-6)))
+      ;; a hint holds only where it was found
+      (setf (car fd-plans::*placing-hint*)
+            (cons (apply #'pose *robot-at-sink*) hint))
+      (is (null (fd-plans::take-placing-hint))))))

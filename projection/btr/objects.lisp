@@ -189,6 +189,14 @@ an error naming OBJECT instead of its handle."
     (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
             (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
 
+(defun local-aabb (object &optional link)
+  "The box of OBJECT's shapes (or its LINK index's) in its own frame, as (values min-vector
+max-vector): the axis-aligned box an unturned copy of it standing at the origin would have."
+  (let ((b (with-live-object (object 'local-aabb)
+             (native:object-local-aabb (whandle object) (object-handle object) (or link -1)))))
+    (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
+            (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
+
 (defun bounding-box (object)
   "Size of OBJECT's axis-aligned bounding box as a 3D-VECTOR."
   (multiple-value-bind (lo hi) (aabb object) (cl-transforms:v- hi lo)))

@@ -186,6 +186,35 @@ using namespace cn;
 
 extern "C" {
 
+int cn_object_local_aabb(int wh, int oh, int link, double *out) {
+  return guard([&] {
+    Object &o = world(wh).obj(oh);
+    check_ptr(out, "AABB output");
+    if (o.kind == CN_BODY && link != -1)
+      fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, oh);
+    if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
+      fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
+           (int)o.link_rb.size() - 1, oh);
+    // each body's shapes, put into the frame of the object (or LINK): the box an upright
+    // copy of it would have, whatever its pose now
+    const btTransform inv = frame_pose(o, link).inverse();
+    btVector3 lo(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT), hi = -lo;
+    bool any = false;
+    for_each_rb(o, [&](btRigidBody *rb, int l) {
+      if (link >= 0 && l != link) return;
+      btVector3 a, b;
+      rb->getCollisionShape()->getAabb(inv * rb->getWorldTransform(), a, b);
+      lo.setMin(a);
+      hi.setMax(b);
+      any = true;
+    });
+    if (!any) lo = hi = btVector3(0, 0, 0);
+    out[0] = lo.x(); out[1] = lo.y(); out[2] = lo.z();
+    out[3] = hi.x(); out[4] = hi.y(); out[5] = hi.z();
+    return 0;
+  });
+}
+
 int cn_world_contacts(int wh, double threshold, int *out4, double *dist, int cap) {
   return guard([&] {
     World &w = world(wh);

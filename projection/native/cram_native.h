@@ -101,6 +101,8 @@ int cn_object_get_color(int world, int obj, int link, double *out4);
 int cn_object_set_collision_filter(int world, int obj, int group, int mask);
 int cn_object_get_collision_filter(int world, int obj, int *out2);
 int cn_object_aabb(int world, int obj, int link, double *out6);  /* min xyz, max xyz    */
+int cn_object_local_aabb(int world, int obj, int link, double *out6); /* the same box in the
+                                                 object's (or link's) own frame            */
 int cn_object_is_active(int world, int obj);                 /* 1 if any body is awake     */
 
 /* ---- rigid bodies (mass 0 = static) -------------------------------------------------------- */

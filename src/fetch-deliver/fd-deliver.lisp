@@ -84,6 +84,7 @@ the target sample can be found (a designator error). Returns the object designat
                      :description (format nil "Delivering ~a: a designator could not be resolved: ~a"
                                           (object-text ?object) e))))
       (with-base-pose-verdicts ()
+      (let ((*placing-hint* (list nil)))
       (cpl:with-retry-counters ((outer-target-retries 4)
                                 (unreachable-target-retries *unreachable-target-retries*))
         (cpl:with-failure-handling
@@ -148,18 +149,24 @@ the target sample can be found (a designator error). Returns the object designat
                             :rethrow-failure 'common-fail:object-undeliverable))))
                   (let ((?look ?target))
                     (exe:perform (desig:an action (type turning-towards) (target ?look))))
-                  (setf ?target (check-placing-collisions ?object ?arm ?target))
-                  (unless (solution-stable-p ?target)
-                    (check-placing-pose-stability ?object ?target))
-                  (handler-case
-                      (exe:perform (desig:an action (type placing) (arm ?arm) (object ?object)
-                                             (target ?target)))
-                    (common-fail:manipulation-low-level-failure (e)
-                      (cpl:fail 'common-fail:object-unreachable
-                                :description (format nil "Placing ~a at ~a failed: ~a"
-                                                     (object-text ?object) ?target e))))
+                  ;; the sample the navigation pre-check put the object down at from here
+                  ;; first (once), then the target's samples in turn
+                  (let ((?at (multiple-value-bind (at hinted)
+                                 (check-placing-collisions ?object ?arm ?target
+                                                           :first (take-placing-hint))
+                               (unless hinted (setf ?target at))
+                               at)))
+                    (unless (solution-stable-p ?at)
+                      (check-placing-pose-stability ?object ?at))
+                    (handler-case
+                        (exe:perform (desig:an action (type placing) (arm ?arm) (object ?object)
+                                               (target ?at)))
+                      (common-fail:manipulation-low-level-failure (e)
+                        (cpl:fail 'common-fail:object-unreachable
+                                  :description (format nil "Placing ~a at ~a failed: ~a"
+                                                       (object-text ?object) ?at e)))))
                   (remember-placing ?object ?arm)
-                  (desig:current-desig ?object))))))))))))
+                  (desig:current-desig ?object)))))))))))))
 
 (defun drop-at-sink ()
   "CRAM's fallback after a failed delivery: drive to the map origin facing -y and put the held

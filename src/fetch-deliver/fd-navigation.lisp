@@ -46,8 +46,8 @@ for the arms, torso and grippers it was found with."
 
 (defun judge-base-pose (pose accept what)
   "(values accepted hits) for the robot standing at POSE: HITS, what it touches there, and
-whether it is free there and ACCEPT (a function of the pose) accepts it. A pose judged before
-within *BASE-POSE-VERDICTS* for the same robot joints and WHAT (a list naming what ACCEPT
+ACCEPTED, NIL unless it is free there and ACCEPT (a function of the pose) accepts it (then
+ACCEPT's value). A pose judged before within *BASE-POSE-VERDICTS* for the same robot joints and WHAT (a list naming what ACCEPT
 checks) gives the same verdict without a check."
   (let ((key (and *base-pose-verdicts* (list* (base-pose-key pose) (robot-joints-key) what))))
     (multiple-value-bind (verdict found)
@@ -57,7 +57,7 @@ checks) gives the same verdict without a check."
       (if found
           (values (car verdict) (cdr verdict))
           (let* ((hits (base-pose-collisions pose))
-                 (accepted (and (null hits) (funcall accept pose) t)))
+                 (accepted (and (null hits) (or (funcall accept pose) nil))))
             (when key
               (sb-thread:with-mutex (*base-pose-verdicts-lock*)
                 (setf (gethash key *base-pose-verdicts*) (cons accepted hits))))
@@ -67,7 +67,7 @@ checks) gives the same verdict without a check."
   "The projection pre-check of navigating: the first of up to *NAVIGATION-CHECK-SAMPLES*
 solutions of LOCATION (a location designator) at which the robot is free of collisions and
 that ACCEPT (a function of the base pose) accepts: the designator of that solution, equated
-with LOCATION. Signals NAVIGATION-GOAL-IN-COLLISION when there is none. WHAT names what
+with LOCATION, and ACCEPT's value there as a second value. Signals NAVIGATION-GOAL-IN-COLLISION when there is none. WHAT names what
 ACCEPT checks (a list, compared with EQUAL): verdicts are reused within
 WITH-BASE-POSE-VERDICTS for the same WHAT."
   (let ((current location))
@@ -77,7 +77,7 @@ WITH-BASE-POSE-VERDICTS for the same WHAT."
                            (desig:designator-error () (return)))))
                (multiple-value-bind (accepted hits) (judge-base-pose pose accept what)
                  (when accepted
-                   (return-from check-navigating-collisions current))
+                   (return-from check-navigating-collisions (values current accepted)))
                  (when hits
                    (log-fd :warn 'navigate "Navigation goal ~a collides with ~{~s~^, ~}; trying ~
                                             the next solution." (urdf-proj::pose-summary pose) hits)))
@@ -103,6 +103,20 @@ verdicts hold across a delivery's retries of new target samples."
   (destructuring-bind (object arm target) place
     (list (object-key object) arm (desig:properties (desig:current-desig target)))))
 
+(defvar *placing-hint* nil
+  "NIL, or a cons whose car NAVIGATE sets, when it pre-checks a base pose for putting an object
+down, to (base-pose . sample-pose): the base pose it drives to and the map pose of the target
+sample the check put the object down at from there. Bound by DELIVER, which tries that sample
+first (TAKE-PLACING-HINT).")
+
+(defun take-placing-hint ()
+  "The sample pose of *PLACING-HINT* when the robot stands at its base pose (0.1 mm, 1e-4 rad);
+else NIL. The hint is used up either way."
+  (let ((hint (and *placing-hint* (shiftf (car *placing-hint*) nil))))
+    (when (and hint (cdr hint) (equal (base-pose-key (car hint))
+                                      (base-pose-key (btr:pose (btr:get-robot-object)))))
+      (cdr hint))))
+
 (defun navigate (&key location (park-arms t) see grasp place &allow-other-keys)
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
 (NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
@@ -112,21 +126,22 @@ A low-level navigation failure is logged and ignored, as on a real base that pla
 obstacles."
   (when park-arms
     (exe:perform (desig:an action (type parking-arms))))
-  (let ((?location (desig:current-desig
-                    (check-navigating-collisions
-                     location :what (list (object-key see) (object-key grasp)
-                                          (and place (place-key place)))
-                              :accept (lambda (pose)
-                                        (and (or (null see) (object-visible-from-p see pose))
-                                             (or (null grasp)
-                                                 (object-graspable-from-p grasp pose))
-                                             (or (null place)
-                                                 (apply #'object-placeable-from-p
-                                                        (append place (list pose))))))))))
-    (handler-case
-        (exe:perform (desig:an action (type going) (target ?location)))
-      (common-fail:navigation-low-level-failure (e)
-        (log-fd :warn 'navigate "Low-level navigation failed: ~a~%Ignoring." e)))))
+  (multiple-value-bind (checked accepted)
+      (check-navigating-collisions
+       location :what (list (object-key see) (object-key grasp) (and place (place-key place)))
+                :accept (lambda (pose)
+                          (and (or (null see) (object-visible-from-p see pose))
+                               (or (null grasp) (object-graspable-from-p grasp pose))
+                               (or (null place)
+                                   (apply #'object-placeable-from-p (append place (list pose)))))))
+    (let ((?location (desig:current-desig checked)))
+      (when (and place *placing-hint*)
+        ;; the sample of the target the check put the object down at from there
+        (setf (car *placing-hint*) (cons (desig:reference ?location) accepted)))
+      (handler-case
+          (exe:perform (desig:an action (type going) (target ?location)))
+        (common-fail:navigation-low-level-failure (e)
+          (log-fd :warn 'navigate "Low-level navigation failed: ~a~%Ignoring." e))))))
 
 (defun turn-towards (&key target robot-location &allow-other-keys)
   "Look at TARGET (a location designator). When the neck cannot reach it, turn the base

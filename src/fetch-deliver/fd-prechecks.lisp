@@ -94,32 +94,43 @@ OBJECT-UNREACHABLE when none does."
                                         free of collisions from here (~d tried)."
                                    (object-text object) (or arms (pp-plans::robot-arms)) tried))))
 
-(defun check-placing-collisions (object arm target)
+(defun placeable-at-p (object arm candidate regrasp)
+  "True when ARM puts OBJECT down at the current solution of the location designator CANDIDATE
+free of collisions, as CHECK-PLACING-COLLISIONS checks a sample (with REGRASP, also that the
+object can be grasped again there)."
+  (let ((?object object) (?arm arm) (?target candidate))
+    (and (within-placing-reach-p (desig:reference candidate))
+         (let* ((grounding (first (pp-plans:ground-action
+                                   :placing (desig:an action (type placing)
+                                                      (object ?object) (arm ?arm)
+                                                      (target ?target)))))
+                (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
+           (and (pp-plans::with-object-being-placed (object candidate)
+                  (trajectory-reachable-p arm trajectory '(:reaching :putting :retracting)))
+                (object-fits-at-p object candidate)
+                (or (not regrasp)
+                    (object-regraspable-at-p
+                     object (pp-plans:pose-in-map (desig:reference candidate)))))))))
+
+(defun check-placing-collisions (object arm target &key first)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
 which ARM puts OBJECT down free of collisions (the designator of that solution; samples beyond
 *PLACING-REACH* of the base are not tried): as CRAM's check, the hand reaches the approach,
 the put-down and the retreat poses (so the hand can also come back for the object the way it
-left); signals
-OBJECT-UNDELIVERABLE when none does, so that the delivery tries another base pose."
-  (let ((current target) (?object object) (?arm arm))
+left). FIRST (a map pose, a sample of TARGET a pre-check accepted from where the robot stands)
+is tried before the others; when it passes, the result is a location designator of that pose,
+with T as a second value.
+Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries another base pose."
+  (let ((regrasp (regrasp-check-target-p target)))
+    (when first
+      (let* ((?pose first) (candidate (desig:a location (pose ?pose))))
+        (when (placeable-at-p object arm candidate regrasp)
+          (return-from check-placing-collisions (values candidate t)))))
     (loop repeat *placing-check-samples*
+          for current = target then (desig:next-solution current)
           while current
-          do (let ((?target current))
-               (when (and (within-placing-reach-p (desig:reference current))
-                          (let* ((grounding (first (pp-plans:ground-action
-                                                    :placing (desig:an action (type placing)
-                                                                       (object ?object) (arm ?arm)
-                                                                       (target ?target)))))
-                                 (trajectory (desig:desig-prop-value (second grounding) :trajectory)))
-                            (and (pp-plans::with-object-being-placed (object current)
-                                   (trajectory-reachable-p arm trajectory
-                                                           '(:reaching :putting :retracting)))
-                                 (object-fits-at-p object current)
-                                 (or (not (regrasp-check-target-p current))
-                                     (object-regraspable-at-p
-                                      object (pp-plans:pose-in-map (desig:reference current)))))))
-                 (return-from check-placing-collisions current))
-               (setf current (desig:next-solution current))))
+          when (placeable-at-p object arm current regrasp)
+            do (return-from check-placing-collisions current))
     (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
@@ -285,9 +296,10 @@ places reachable from FROM (the robot's name or a base pose): CRAM's T' = target
   (desig:extend-designator-properties (desig:current-desig target) `((:reachable-from ,from))))
 
 (defun object-placeable-from-p (object arm target pose)
-  "True when the robot, standing at POSE (map), puts OBJECT held in ARM down at one of the first
-*PLACING-BASE-CHECK-SAMPLES* solutions of TARGET within its reach (TARGET-REACHABLE-FROM)
-free of collisions. Checked in the belief state; the robot is put back."
+  "The map pose of the first of *PLACING-BASE-CHECK-SAMPLES* solutions of TARGET within reach
+(TARGET-REACHABLE-FROM) at which the robot, standing at POSE (map), puts OBJECT held in ARM
+down free of collisions; NIL when there is none. Checked in the belief state; the robot is put
+back."
   (call-restoring-robot
    (lambda ()
      (let ((base (pp-plans:pose-in-map pose)))
@@ -296,7 +308,10 @@ free of collisions. Checked in the belief state; the robot is put back."
              (here (target-reachable-from target (cl-transforms-stamped:pose->pose-stamped
                                                   cram-tf:*fixed-frame* 0d0 base))))
          (unwind-protect
-              (handler-case (progn (check-placing-collisions object arm here) t)
+              (handler-case
+                  (cl-transforms-stamped:pose->pose-stamped
+                   cram-tf:*fixed-frame* 0d0
+                   (pp-plans:pose-in-map (desig:reference (check-placing-collisions object arm here))))
                 ((or common-fail:object-undeliverable desig:designator-error) () nil))
            ;; one costmap per candidate base pose: not kept in the cache
            (costmap:forget-designator-costmap here)))))))

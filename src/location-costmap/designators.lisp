@@ -176,6 +176,18 @@ belief state."
               thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
         0d0 1d0)))
 
+(defun object-footprint (object)
+  "(values half-size lift) of the belief-state OBJECT: half the larger of its horizontal
+extents standing upright, from its box in its own frame (BTR:LOCAL-AABB), so the same however
+it is held now; and, as CRAM's height generator, the height of its origin above the bottom of
+its box in the map as it is now (for a held object: as the hand holds it, which keeps the
+fingers of a hand holding it low clear of the surface)."
+  (multiple-value-bind (lo hi) (btr:local-aabb object)
+    (values (* 0.5d0 (max (- (cl-transforms:x hi) (cl-transforms:x lo))
+                          (- (cl-transforms:y hi) (cl-transforms:y lo))))
+            (- (cl-transforms:z (cl-transforms:origin (btr:pose object)))
+               (cl-transforms:z (btr:aabb object))))))
+
 (defun on-costmap (designator surface)
   "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a
 margin (half the size of the FOR object, when given), away from the items already there; the
@@ -187,16 +199,8 @@ unturned), so that an object held by its side can be put down from where the rob
                           (object-designator-world-object for))))
     (multiple-value-bind (x0 y0 x1 y1 top) (surface-of surface)
       (let* ((costmap (make-location-costmap))
-             (margin (if for-object
-                         (multiple-value-bind (lo hi) (btr:aabb for-object)
-                           (* 0.5d0 (max (- (cl-transforms:x hi) (cl-transforms:x lo))
-                                         (- (cl-transforms:y hi) (cl-transforms:y lo)))))
-                         *surface-margin*))
-             (lift (if for-object
-                       (multiple-value-bind (lo) (btr:aabb for-object)
-                         (- (cl-transforms:z (cl-transforms:origin (btr:pose for-object)))
-                            (cl-transforms:z lo)))
-                       0d0))
+             (margin (if for-object (object-footprint for-object) *surface-margin*))
+             (lift (if for-object (nth-value 1 (object-footprint for-object)) 0d0))
              (cx (/ (+ x0 x1) 2)) (cy (/ (+ y0 y1) 2))
              (items (supporting-items x0 y0 x1 y1 top for-object)))
         (register-cost-function costmap

@@ -158,17 +158,14 @@ tops of their boxes."
           (values (min wx wy) (min wx wy))))))
 
 (defun for-object-geometry (designator)
-  "(values half-size lift object) of the FOR object of the location DESIGNATOR: half its
-larger horizontal extent, the height of its origin above its bottom, and the belief-state
-object; (values nil 0 nil) when it has none in the belief state."
+  "(values half-size lift object) of the FOR object of the location DESIGNATOR standing upright
+(OBJECT-FOOTPRINT) and the belief-state object; (values nil 0 nil) when it has none in the
+belief state."
   (let* ((for (desig:desig-prop-value designator :for))
          (object (and (typep for 'desig:object-designator) (object-designator-world-object for))))
     (when (and for (not (typep for 'desig:object-designator)))
       (error "Location designator ~a: (for ~s), expected an object designator." designator for))
     (if object
-        (multiple-value-bind (lo hi) (btr:aabb object)
-          (values (* 0.5d0 (max (- (cl-transforms:x hi) (cl-transforms:x lo))
-                                (- (cl-transforms:y hi) (cl-transforms:y lo))))
-                  (- (cl-transforms:z (cl-transforms:origin (btr:pose object))) (cl-transforms:z lo))
-                  object))
+        (multiple-value-bind (half lift) (object-footprint object)
+          (values half lift object))
         (values nil 0d0 nil))))
