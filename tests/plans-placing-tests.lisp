@@ -107,6 +107,36 @@ right arm. Returns the bottle's pose before the pick-up."
     (is (< (xy-distance (xyz (btr:pose (obj name))) '(-0.9 1.5)) 0.01))
     (is-true (stable-p name))))
 
+(test an-object-held-on-its-side-is-put-down-on-the-surface-not-into-it
+  ;; a cup hanging on its side (as from a hand parked for carrying), put down upright with its
+  ;; origin too low: the put-down pose is raised by its upright bottom offset, not by the
+  ;; smaller one of its box as it hangs now
+  (btw-tut:init-projection)
+  (let* ((island (link-top "kitchen_island_surface"))
+         (w btr:*current-bullet-world*))
+    (btr:add-object w :mesh :cup-9
+                    (cl-transforms:make-pose (cl-transforms:make-3d-vector -0.9 1.2 1.4)
+                                             (cl-transforms:axis-angle->quaternion
+                                              (cl-transforms:make-3d-vector 1 0 0) (/ pi 2)))
+                    :mesh :cup :mass 0.2 :types '(:cup))
+    (let* ((cup (obj :cup-9))
+           (upright-bottom (- (cl-transforms:z (nth-value 0 (btr:local-aabb cup)))))
+           (hanging-bottom (- 1.4d0 (bottom-z :cup-9)))
+           (?pose (cl-transforms-stamped:make-pose-stamped
+                   "map" 0d0 (cl-transforms:make-3d-vector -0.9 1.2 (+ island 0.01d0))
+                   (cl-transforms:make-identity-rotation)))
+           (goal (pp-plans::placing-target-pose (desig:an object (type cup) (name cup-9)) :cup
+                                                (desig:a location (pose ?pose))))
+           (z (cl-transforms:z (cl-transforms:origin (pp-plans:pose-in-map goal)))))
+      (is (> (- upright-bottom hanging-bottom) 0.02)
+          "the cup stands taller (~,3f) than it hangs (~,3f)" upright-bottom hanging-bottom)
+      (is (<= (+ island upright-bottom -0.002d0) z (+ island upright-bottom 0.012d0))
+          "put down at ~,3f; the island top is ~,3f, the cup's bottom ~,3f below its origin"
+          z island upright-bottom)
+      (is (< (abs (- (pp-plans::bottom-offset-at cup (cl-transforms:make-identity-rotation))
+                     upright-bottom))
+             1d-9)))))
+
 (test placing-bad-input-names-the-value
   (btw-tut:init-projection)
   (btw-tut:spawn-two-bottles)

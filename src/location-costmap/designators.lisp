@@ -177,16 +177,20 @@ belief state."
         0d0 1d0)))
 
 (defun object-footprint (object)
-  "(values half-size lift) of the belief-state OBJECT: half the larger of its horizontal
-extents standing upright, from its box in its own frame (BTR:LOCAL-AABB), so the same however
-it is held now; and, as CRAM's height generator, the height of its origin above the bottom of
-its box in the map as it is now (for a held object: as the hand holds it, which keeps the
-fingers of a hand holding it low clear of the surface)."
+  "(values half-size lift) of the belief-state OBJECT as it is put down, upright: half the
+larger of its horizontal extents, from its box in its own frame (BTR:LOCAL-AABB), so the same
+however it is held now; and the height of its origin above the surface, which is the larger of
+its origin's height above its bottom standing upright and (as CRAM's height generator takes
+it) above the bottom of its box in the map as it is now. The first keeps an object held turned
+(a cup hanging on its side from a hand parked for carrying) from being put down into the
+surface, which would throw it through; the second keeps the fingers holding a flat object
+from below (the spoon) clear of the surface."
   (multiple-value-bind (lo hi) (btr:local-aabb object)
     (values (* 0.5d0 (max (- (cl-transforms:x hi) (cl-transforms:x lo))
                           (- (cl-transforms:y hi) (cl-transforms:y lo))))
-            (- (cl-transforms:z (cl-transforms:origin (btr:pose object)))
-               (cl-transforms:z (btr:aabb object))))))
+            (max (- (cl-transforms:z lo))
+                 (- (cl-transforms:z (cl-transforms:origin (btr:pose object)))
+                    (cl-transforms:z (btr:aabb object)))))))
 
 (defun on-costmap (designator surface)
   "The costmap of the poses on the SURFACE object designator: its top rectangle shrunk by a

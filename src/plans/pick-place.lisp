@@ -224,10 +224,23 @@ and ignored; a failed grip propagates (e.g. COMMON-FAIL:GRIPPER-CLOSED-COMPLETEL
 
 ;;; ---- placing ------------------------------------------------------------------------------------
 
+(defun bottom-offset-at (object orientation)
+  "How far the bottom of the belief-state OBJECT lies below its origin when it is turned to
+ORIENTATION (a quaternion in the map): the lowest corner of its box in its own frame
+(BTR:LOCAL-AABB), turned. Not how it hangs in a hand now, which may be on its side."
+  (multiple-value-bind (lo hi) (btr:local-aabb object)
+    (- (loop for x in (list (cl-transforms:x lo) (cl-transforms:x hi))
+             minimize (loop for y in (list (cl-transforms:y lo) (cl-transforms:y hi))
+                            minimize (loop for z in (list (cl-transforms:z lo) (cl-transforms:z hi))
+                                           minimize (cl-transforms:z
+                                                     (cl-transforms:rotate
+                                                      orientation
+                                                      (cl-transforms:make-3d-vector x y z)))))))))
+
 (defun placing-target-pose (object type target)
   "The object pose (fixed frame) for placing OBJECT at TARGET: a rotationally symmetric object
-keeps its orientation in hand; an object whose bottom would sink into the surface below the
-target is raised to rest on it."
+keeps its orientation in hand; an object whose bottom, turned as it is put down
+(BOTTOM-OFFSET-AT), would sink into the surface below the target is raised to rest on it."
   (let* ((name (object-designator-name object))
          (current (object-pose-in-map object))
          (goal (pose-in-map (location-pose target)))
@@ -238,8 +251,7 @@ target is raised to rest on it."
          (o (btr:object btr:*current-bullet-world* name)))
     (if (null o)
         goal
-        (let* ((bottom-offset (- (cl-transforms:z (cl-transforms:origin current))
-                                 (cl-transforms:z (btr:aabb o))))
+        (let* ((bottom-offset (bottom-offset-at o (cl-transforms:orientation goal)))
                (gx (cl-transforms:x (cl-transforms:origin goal)))
                (gy (cl-transforms:y (cl-transforms:origin goal)))
                (gz (cl-transforms:z (cl-transforms:origin goal)))
