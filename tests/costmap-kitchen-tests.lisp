@@ -111,6 +111,28 @@
         (is (not (eq padded opened)) "a new joint state gives a new grid")
         (is (costmap:occupied-p opened -0.25 0.9) "the open drawer occupies the floor in front")))))
 
+(test a-turned-link-occupies-its-own-outline
+  ;; the kitchen turned by 0.4 rad: the island occupies its turned outline, not the larger box
+  ;; around it in the map (whose corners lie on free floor)
+  (in-kitchen
+    (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
+           (name "kitchen_island_surface"))
+      (setf (btr:pose kitchen)
+            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                     (cl-transforms:axis-angle->quaternion
+                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (let* ((index (position name (btr:link-names kitchen) :test #'string=))
+             (grid (costmap:environment-occupancy-grid))
+             (corners (costmap::link-footprint kitchen index name)))
+        (multiple-value-bind (lo hi) (btr:aabb kitchen index)
+          (let ((cx (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))
+                (cy (/ (+ (cl-transforms:y lo) (cl-transforms:y hi)) 2)))
+            (is (= 4 (length corners)) "a box's outline has 4 corners: ~a" corners)
+            (is (costmap:occupied-p grid cx cy) "the island's middle is occupied")
+            ;; two corners of the map box, 5 cm in: outside the turned island
+            (is (not (costmap:occupied-p grid (+ (cl-transforms:x lo) 0.05) (+ (cl-transforms:y lo) 0.05))))
+            (is (not (costmap:occupied-p grid (- (cl-transforms:x hi) 0.05) (- (cl-transforms:y hi) 0.05))))))))))
+
 ;;; ---- visible-for -----------------------------------------------------------------------------------
 
 (test visible-for-mug-over-20-seeds

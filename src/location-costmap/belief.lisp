@@ -44,12 +44,99 @@
                    when (<= (+ (* dx dx) (* dy dy)) p2)
                      do (setf (aref bits r c) 1)))))
 
+(defun convex-hull-2d (points)
+  "The convex hull of POINTS ((x y) ...), counter-clockwise, without repeated corners."
+  (let ((sorted (sort (remove-duplicates (copy-list points) :test #'equal)
+                      (lambda (a b) (or (< (first a) (first b))
+                                        (and (= (first a) (first b)) (< (second a) (second b))))))))
+    (labels ((cross (o a b) (- (* (- (first a) (first o)) (- (second b) (second o)))
+                             (* (- (second a) (second o)) (- (first b) (first o)))))
+           (chain (pts)
+             (let ((hull '()))
+               (dolist (p pts (reverse hull))
+                 (loop while (and (cdr hull) (<= (cross (second hull) (first hull) p) 0d0))
+                       do (pop hull))
+                 (push p hull)))))
+      (if (< (length sorted) 3)
+          sorted
+          (let ((lower (chain sorted)) (upper (chain (reverse sorted))))
+            (append (butlast lower) (butlast upper)))))))
+
+(defun link-footprint (env index name)
+  "The corners (x y), counter-clockwise, of the outline on the floor of the box of link INDEX
+\(named NAME) of ENV in the link's own frame (BTR:LOCAL-AABB) as the link stands: for a link
+turned about the vertical, its turned rectangle, not the larger box around it in the map."
+  (multiple-value-bind (lo hi) (btr:local-aabb env index)
+    (let ((pose (btr:link-pose env name)) (points '()))
+      (dolist (x (list (cl-transforms:x lo) (cl-transforms:x hi)))
+        (dolist (y (list (cl-transforms:y lo) (cl-transforms:y hi)))
+          (dolist (z (list (cl-transforms:z lo) (cl-transforms:z hi)))
+            (let ((p (cl-transforms:transform-point (cl-transforms:pose->transform pose)
+                                                    (cl-transforms:make-3d-vector x y z))))
+              (push (list (cl-transforms:x p) (cl-transforms:y p)) points)))))
+      (convex-hull-2d points))))
+
+(defun axis-aligned-p (corners tolerance)
+  "True when the polygon CORNERS is a rectangle along the map's axes within TOLERANCE metres
+\(a fraction of a costmap cell): its box in the map is as good as the polygon."
+  (let ((x0 (reduce #'min corners :key #'first)) (x1 (reduce #'max corners :key #'first))
+        (y0 (reduce #'min corners :key #'second)) (y1 (reduce #'max corners :key #'second)))
+    (every (lambda (c) (and (or (< (abs (- (first c) x0)) tolerance)
+                                (< (abs (- (first c) x1)) tolerance))
+                            (or (< (abs (- (second c) y0)) tolerance)
+                                (< (abs (- (second c) y1)) tolerance))))
+           corners)))
+
+(defun rasterise-polygon (bits origin-x origin-y resolution corners padding)
+  "Mark the cells of BITS whose centres are within PADDING of the convex polygon CORNERS
+\((x y) ..., counter-clockwise)."
+  (declare (type (simple-array bit (* *)) bits) (type double-float origin-x origin-y resolution
+                                                      padding))
+  (let* ((n (length corners))
+         (ax (make-array n :element-type 'double-float))
+         (ay (make-array n :element-type 'double-float))
+         (ex (make-array n :element-type 'double-float))
+         (ey (make-array n :element-type 'double-float))
+         (xs (mapcar #'first corners)) (ys (mapcar #'second corners))
+         (rows (array-dimension bits 0)) (cols (array-dimension bits 1))
+         (c0 (max 0 (floor (- (reduce #'min xs) padding origin-x) resolution)))
+         (c1 (min (1- cols) (floor (- (+ (reduce #'max xs) padding) origin-x) resolution)))
+         (r0 (max 0 (floor (- (reduce #'min ys) padding origin-y) resolution)))
+         (r1 (min (1- rows) (floor (- (+ (reduce #'max ys) padding) origin-y) resolution)))
+         (p2 (* padding padding)))
+    (loop for (a . rest) on corners
+          for b = (or (first rest) (first corners))
+          for i from 0
+          do (setf (aref ax i) (float (first a) 1d0) (aref ay i) (float (second a) 1d0)
+                   (aref ex i) (- (float (first b) 1d0) (aref ax i))
+                   (aref ey i) (- (float (second b) 1d0) (aref ay i))))
+    (flet ((near-p (x y)
+             (declare (type double-float x y) (optimize speed))
+             (let ((inside t) (best most-positive-double-float))
+               (declare (type double-float best))
+               (dotimes (i n (or inside (<= best p2)))
+                 (let* ((dx (- x (aref ax i))) (dy (- y (aref ay i)))
+                        (vx (aref ex i)) (vy (aref ey i))
+                        (len2 (+ (* vx vx) (* vy vy)))
+                        (k (if (< len2 1d-18) 0d0
+                               (max 0d0 (min 1d0 (/ (+ (* dx vx) (* dy vy)) len2)))))
+                        (qx (- dx (* k vx))) (qy (- dy (* k vy))))
+                   (when (< (- (* vx dy) (* vy dx)) 0d0) (setf inside nil))
+                   (setf best (min best (+ (* qx qx) (* qy qy)))))))))
+      (loop for r from r0 to r1
+            for y double-float = (+ origin-y (* (+ r 0.5d0) resolution))
+            do (loop for c from c0 to c1
+                     for x double-float = (+ origin-x (* (+ c 0.5d0) resolution))
+                     when (and (zerop (aref bits r c)) (near-p x y))
+                       do (setf (aref bits r c) 1))))))
+
 (defun environment-occupancy-grid (&key (world btr:*current-bullet-world*) (padding 0d0)
                                         width height origin-x origin-y resolution
                                         (z-min *occupancy-z-min*) (z-max *occupancy-z-max*))
   "The occupancy grid of the static geometry of WORLD: every link of every environment
 (articulated object other than the robot) whose bounding box reaches between Z-MIN and Z-MAX
-occupies the cells within PADDING metres of its box.  The grid geometry defaults to the costmap
+occupies the cells within PADDING metres of the outline of its own box as it stands
+\(LINK-FOOTPRINT).  The grid geometry defaults to the costmap
 metadata.  Grids are cached per environment pose and joint state."
   (let* ((size (unless (and width height) (costmap-metadata-value 'costmap-size :arity 2)))
          (origin (unless (and origin-x origin-y) (costmap-metadata-value 'costmap-origin :arity 2)))
@@ -72,16 +159,22 @@ metadata.  Grids are cached per environment pose and joint state."
         (let* ((grid (make-occupancy-grid width height origin-x origin-y resolution))
                (bits (occupancy-bits grid)))
           (dolist (env environments)
-            (loop for nil in (btr:link-names env)
+            (loop for name in (btr:link-names env)
                   for i from 0
                   do (multiple-value-bind (lo hi) (btr:aabb env i)
                        (when (and (> (- (cl-transforms:x hi) (cl-transforms:x lo)) 1d-6)
                                   (> (- (cl-transforms:y hi) (cl-transforms:y lo)) 1d-6)
                                   (> (cl-transforms:z hi) z-min)
                                   (< (cl-transforms:z lo) z-max))
-                         (rasterise-box bits origin-x origin-y resolution
-                                        (cl-transforms:x lo) (cl-transforms:y lo)
-                                        (cl-transforms:x hi) (cl-transforms:y hi) padding)))))
+                         ;; the link's own box turned as it stands (a table turned by a few
+                         ;; degrees would block a larger box around it)
+                         (let ((corners (link-footprint env i name)))
+                           (if (and (>= (length corners) 3) (not (axis-aligned-p corners (* 0.25d0 resolution))))
+                               (rasterise-polygon bits origin-x origin-y resolution corners padding)
+                               (rasterise-box bits origin-x origin-y resolution
+                                              (cl-transforms:x lo) (cl-transforms:y lo)
+                                              (cl-transforms:x hi) (cl-transforms:y hi)
+                                              padding)))))))
           (push (cons key grid) *occupancy-cache*)
           (when (> (length *occupancy-cache*) *occupancy-cache-size*)
             (setf *occupancy-cache* (subseq *occupancy-cache* 0 *occupancy-cache-size*)))
