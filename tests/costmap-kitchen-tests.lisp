@@ -111,6 +111,21 @@
         (is (not (eq padded opened)) "a new joint state gives a new grid")
         (is (costmap:occupied-p opened -0.25 0.9) "the open drawer occupies the floor in front")))))
 
+(test a-long-object-is-kept-clear-of-items-by-its-extents-as-it-will-lie
+  ;; a spoon-like object (0.11 long from its origin, 0.023 wide) next to an item (a 10 cm
+  ;; square at the origin): 6 cm beside the item it fits when it lies along the item's side,
+  ;; not when it lies pointing at the item
+  (let ((items '((-0.05d0 -0.05d0 0.05d0 0.05d0))))
+    (flet ((free-p (yaw x y)
+             (> (funcall (costmap::turned-items-free-space-function
+                          items 0.11d0 0.023d0 (lambda (x y) (declare (ignore x y)) yaw))
+                         x y)
+                0)))
+      (is-true (free-p (/ pi 2) 0.08d0 0d0) "lying along the item's side")
+      (is (not (free-p 0d0 0.08d0 0d0)) "pointing at the item")
+      (is-true (free-p 0d0 0.17d0 0d0) "pointing at it, 17 cm away")
+      (is (not (free-p (/ pi 2) 0d0 0.08d0)) "turned a quarter, on the other axis"))))
+
 (test a-turned-link-occupies-its-own-outline
   ;; the kitchen turned by 0.4 rad: the island occupies its turned outline, not the larger box
   ;; around it in the map (whose corners lie on free floor)

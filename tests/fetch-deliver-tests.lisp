@@ -221,6 +221,15 @@ sink behind it; either way the held object ends where it was, attached to the sa
       (is (eq t (urdf-proj:with-simulated-robot
                   (fd-plans::object-regraspable-at-p object resting))))
       (is (unchanged-p) "the held object was put back after the check")
+      ;; a later fetch limited to grasps the bottle has none of: not graspable again
+      (let ((fd-plans::*regrasp-grasps* '((:bottle (:no-such-grasp)))))
+        (is (equal '(:no-such-grasp) (fd-plans::regrasp-grasps object)))
+        (is (null (urdf-proj:with-simulated-robot
+                    (fd-plans::object-regraspable-at-p object resting)))))
+      (let ((fd-plans::*regrasp-grasps* '((:cup (:no-such-grasp)))))
+        (is (null (fd-plans::regrasp-grasps object)) "other types limit nothing")
+        (is (eq t (urdf-proj:with-simulated-robot
+                    (fd-plans::object-regraspable-at-p object resting)))))
       (is (null (urdf-proj:with-simulated-robot
                   (fd-plans::object-regraspable-at-p object
                                                      (pp-plans:pose-in-map (apply #'pose *sink*))))))

@@ -141,8 +141,10 @@ are). No failure is caught. Returns the object list."
            (spawn-objects-on-fixed-spots :object-types object-list)
            (urdf-proj:with-simulated-robot
              (park-robot)
-             (dolist (type object-list)
-               (transport type :table-setting))
+             ;; what is put on the table must be graspable there as the cleaning grasps it
+             (let ((fd-plans::*regrasp-grasps* *cleaning-grasps*))
+               (dolist (type object-list)
+                 (transport type :table-setting)))
              (when *after-setting-hook* (funcall *after-setting-hook*))
              (dolist (type (reverse object-list))
                (transport type :table-cleaning))

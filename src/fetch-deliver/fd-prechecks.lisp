@@ -149,6 +149,17 @@ stands there when it is fetched; together with the base pose it was put down fro
 first to that fetch), a place the open hand cannot reach again is not taken. NIL: any place
 the object can be put down at.")
 
+(defvar *regrasp-grasps* '()
+  "An alist of object type -> the grasps a later fetch of an object of that type, put down now,
+will be limited to (as a table is cleared with fewer grasps than it was set with); the re-grasp
+check (OBJECT-REGRASPABLE-AT-P) tries only those. Types not listed: any grasp.")
+
+(defun regrasp-grasps (object)
+  "The grasps of *REGRASP-GRASPS* for the type of the object designator OBJECT (NIL: any)."
+  (let ((type (desig:desig-prop-value object :type)))
+    (and type (second (assoc type *regrasp-grasps*
+                             :test (lambda (a b) (string= (symbol-name a) (symbol-name b))))))))
+
 (defun regrasp-check-target-p (target)
   "True when an object put down at TARGET (a location designator) must be graspable there
 again: *CHECK-REGRASPING* is on and TARGET is a place on a surface (ON it, or relative to an
@@ -188,13 +199,13 @@ robot is put back. Returns THUNK's value, or T when there is no such object or r
 
 (defun object-regraspable-at-p (object pose)
   "True when OBJECT (an object designator of the belief state, held by the robot), standing
-free at POSE (map), can be grasped by the robot from where it stands, with any arm and grasp
-(CHECK-PICKING-UP-COLLISIONS). Checked in the belief state (CALL-WITH-OBJECT-LET-GO-AT)."
+free at POSE (map), can be grasped by the robot from where it stands, with any arm and any grasp
+a later fetch may use (REGRASP-GRASPS; CHECK-PICKING-UP-COLLISIONS). Checked in the belief state (CALL-WITH-OBJECT-LET-GO-AT)."
   (call-with-object-let-go-at
    object pose
    (lambda (o)
      (declare (ignore o))
-     (handler-case (progn (check-picking-up-collisions object) t)
+     (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object)) t)
        ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil)))))
 
 (defparameter *placing-penetration* 0.01d0

@@ -176,6 +176,26 @@ belief state."
               thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
         0d0 1d0)))
 
+(defun turned-items-free-space-function (items half-x half-y yaw-function)
+  "A cost function: 0 where an object of half extents HALF-X, HALF-Y (in its own frame), turned
+to the yaw YAW-FUNCTION gives for the place (x y), would overlap one of the rectangles ITEMS
+\((x0 y0 x1 y1) ...); else 1. A long, thin object (a spoon) laid along a table's edge needs its
+length only along it."
+  (lambda (x y)
+    (let* ((yaw (funcall yaw-function x y))
+           (c (abs (cos yaw))) (s (abs (sin yaw)))
+           (ex (+ (* c half-x) (* s half-y))) (ey (+ (* s half-x) (* c half-y))))
+      (if (loop for (a b c1 d) in items
+                thereis (and (< (- a ex) x (+ c1 ex)) (< (- b ey) y (+ d ey))))
+          0d0 1d0))))
+
+(defun object-half-extents (object)
+  "(values half-x half-y) of the belief-state OBJECT in its own frame, from its origin (the
+larger side of its box, BTR:LOCAL-AABB, on each axis)."
+  (multiple-value-bind (lo hi) (btr:local-aabb object)
+    (values (max (abs (cl-transforms:x lo)) (abs (cl-transforms:x hi)))
+            (max (abs (cl-transforms:y lo)) (abs (cl-transforms:y hi))))))
+
 (defun object-footprint (object)
   "(values half-size lift) of the belief-state OBJECT as it is put down, upright: half the
 larger of its horizontal extents, from its box in its own frame (BTR:LOCAL-AABB), so the same

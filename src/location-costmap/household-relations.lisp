@@ -132,7 +132,8 @@ angle off it, 0 where that cosine is below THRESHOLD or on the other side."
 
 (defun relations-costmap (designator)
   "Every relation of DESIGNATOR to other objects in one costmap, clear (by half the FOR
-object's size) of the items on the reference object's support; without ON, IN or ABOVE also
+object's size, or, with an ORIENTATION, by its extents turned as it will lie) of the items on
+the reference object's support; without ON, IN or ABOVE also
 the support's box (shrunk for the FOR object), its top as the height and, for a FOR object,
 quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION-GENERATOR)."
   (let ((costmap (make-location-costmap))
@@ -166,8 +167,17 @@ quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION
                                           (cl-transforms:x hi) (cl-transforms:y hi)
                                           (cl-transforms:z hi) for-object)))
             (when items
-              (register-cost-function costmap (items-free-space-function items for-half)
-                                      'relation-free-space 5))))
+              (register-cost-function
+               costmap
+               (if (desig:desig-prop-value designator :orientation)
+                   ;; laid along the support's nearest edge (support-aligned): its own
+                   ;; extents, turned as it will lie
+                   (let ((body (orientation-body designator)))
+                     (multiple-value-bind (hx hy) (object-half-extents for-object)
+                       (turned-items-free-space-function
+                        items hx hy (lambda (x y) (nearest-edge-yaw body x y)))))
+                   (items-free-space-function items for-half))
+               'relation-free-space 5))))
         (unless (some (lambda (key) (desig:desig-prop-value designator key)) '(:on :in :above))
           (let ((support (relation-support-body designator)))
             (register-cost-function costmap (shrunk-box-function (body-lo support) (body-hi support)
