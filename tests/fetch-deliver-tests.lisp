@@ -262,6 +262,19 @@ sink behind it; either way the held object ends where it was, attached to the sa
   (let ((put-from (cl-transforms:make-3d-vector 0.8 0.7 0)))
     (is (< (cl-transforms:v-dist (cl-transforms:origin (fetch-location-first-pose)) put-from) 1d-3)
         "the first base pose offered is where the robot put it down from")
+    ;; the fetch drives there first (the pre-check judging it), for the arm it was put down with
+    (let* ((arm (fd-plans::placing-arm (fd-plans::placing-record :object-1)))
+           (other (if (eq arm :left) :right :left))
+           (object (desig:an object (type bottle) (name object-1)))
+           (first-location (fd-plans::placed-from-location object nil)))
+      (is-true first-location)
+      (when first-location
+        (is (< (cl-transforms:v-dist (cl-transforms:origin (pp-plans:pose-in-map
+                                                            (desig:reference first-location)))
+                                     put-from)
+               1d-3)))
+      (is-true (fd-plans::placed-from-location object (list arm)))
+      (is (null (fd-plans::placed-from-location object (list other)))))
     ;; moved by 5 cm: no longer offered
     (let ((o (btr:object btr:*current-bullet-world* :object-1)))
       (setf (btr:pose o) (cl-transforms:make-pose

@@ -77,7 +77,8 @@ the target sample can be found (a designator error). Returns the object designat
   (let ((?object object)
         (?target (reset-or-nil target))
         (?robot-location (reset-or-nil robot-location))
-        (?arm (or arm (first (pp-plans::arms-holding (designator-object-name object))))))
+        (?arm (or arm (first (pp-plans::arms-holding (designator-object-name object)))))
+        (stood nil))
     (cpl:with-failure-handling
         ((desig:designator-error (e)
            (cpl:fail 'common-fail:delivering-failed
@@ -158,6 +159,7 @@ the target sample can be found (a designator error). Returns the object designat
                                at)))
                     (unless (solution-stable-p ?at)
                       (check-placing-pose-stability ?object ?at))
+                    (setf stood (btr:pose (btr:get-robot-object)))
                     (handler-case
                         (exe:perform (desig:an action (type placing) (arm ?arm) (object ?object)
                                                (target ?at)))
@@ -165,7 +167,9 @@ the target sample can be found (a designator error). Returns the object designat
                         (cpl:fail 'common-fail:object-unreachable
                                   :description (format nil "Placing ~a at ~a failed: ~a"
                                                        (object-text ?object) ?at e)))))
-                  (remember-placing ?object ?arm)
+                  ;; where it stood before placing moved the base to reach: the pose the
+                  ;; pre-checks judged
+                  (remember-placing ?object ?arm stood)
                   (desig:current-desig ?object)))))))))))))
 
 (defun drop-at-sink ()

@@ -21,13 +21,15 @@ around it)."
 (defun fetch (&key object arms grasps robot-location look-location &allow-other-keys)
   "Fetch the perceived OBJECT: drive to ROBOT-LOCATION, turn towards LOOK-LOCATION, perceive
 the object again and pick it up with the first of ARMS and GRASPS (NIL: what picking up
-chooses). Retries: the next grasp (5), the next arm (1), a new base pose (50, the torso raised) on
+chooses). An object the robot put down itself and that has not moved since is first fetched
+from where it was put down from (PLACED-FROM-LOCATION). Retries: the next grasp (5), the next arm (1), a new base pose (50, the torso raised) on
 navigation, perception, reach or manipulation failures, re-perceiving and re-picking (2) on a
 misgrasp.
 Returns the object designator; FETCHING-FAILED when all are used up."
   (let ((?object object)
         (?robot-location (reset-or-nil robot-location))
         (?look-location (reset-or-nil look-location))
+        (placed-from (placed-from-location object arms))
         (all-arms arms) (all-grasps grasps))
     (cpl:with-failure-handling
         ((desig:designator-error (e)
@@ -42,6 +44,11 @@ Returns the object designator; FETCHING-FAILED when all are used up."
                   common-fail:perception-low-level-failure
                   common-fail:object-unreachable
                   common-fail:manipulation-low-level-failure) (e)
+               (when placed-from
+                 ;; the base pose it was put down from did not do: the costmap's solutions
+                 (log-fd :info 'fetch "Not from where ~a was put down: ~a" (object-text ?object) e)
+                 (setf placed-from nil)
+                 (cpl:retry))
                (common-fail:retry-with-loc-designator-solutions
                    ?robot-location relocation-retries
                    (:error-object-or-string
@@ -51,7 +58,7 @@ Returns the object designator; FETCHING-FAILED when all are used up."
                  ;; look from higher up at the next base pose
                  (exe:perform (desig:an action (type moving-torso) (joint-angle upper-limit)
                                         (goal (cpoe:torso-at :upper-limit)))))))
-          (let ((?location ?robot-location))
+          (let ((?location (or placed-from ?robot-location)))
             (exe:perform (desig:an action (type navigating) (location ?location) (see ?object)
                                    (grasp ?object))))
           (let ((?target ?look-location))

@@ -26,15 +26,15 @@ with, and the object's map position right after."
   (or (gethash world *placing-memory*)
       (and create (setf (gethash world *placing-memory*) (make-hash-table :test 'eq)))))
 
-(defun remember-placing (object arm)
-  "Record that OBJECT (a designator or name) was just put down with ARM from where the robot
-stands now."
+(defun remember-placing (object arm &optional base-pose)
+  "Record that OBJECT (a designator or name) was just put down with ARM from BASE-POSE (map;
+NIL: where the robot stands now)."
   (let* ((name (designator-object-name object))
          (o (and name (btr:object btr:*current-bullet-world* name)))
          (robot (btr:get-robot-object)))
     (when (and o robot)
       (setf (gethash name (world-placing-records btr:*current-bullet-world* t))
-            (make-placing-record :base-pose (btr:pose robot) :arm arm
+            (make-placing-record :base-pose (or base-pose (btr:pose robot)) :arm arm
                                  :object-position (cl-transforms:origin (btr:pose o)))))))
 
 (defun forget-placings (&optional (world btr:*current-bullet-world*))
@@ -66,6 +66,18 @@ was put down from, while O stands where it was put (PLACING-RECORD); no candidat
           (when (or (null arm) (eq arm (placing-arm record)))
             (list (cl-transforms-stamped:pose->pose-stamped
                    cram-tf:*fixed-frame* 0d0 (placing-base-pose record)))))))))
+
+(defun placed-from-location (object arms)
+  "A location designator of the base pose OBJECT was put down from (PLACING-RECORD), when it was
+put down with one of ARMS (NIL: any); else NIL. The fetch that takes it back drives there first,
+with the navigation pre-check (seeing and grasping it from there) as the judge: the costmap's
+line-of-sight validator, which would turn the pose down where a neighbour hides a side of the
+object, has no say."
+  (let ((record (placing-record object)))
+    (when (and record (or (null arms) (member (placing-arm record) arms)))
+      (let ((?pose (cl-transforms-stamped:pose->pose-stamped
+                    cram-tf:*fixed-frame* 0d0 (placing-base-pose record))))
+        (desig:a location (pose ?pose))))))
 
 (desig:register-location-generator 12 placed-from-location-generator
   "For a fetch's robot location, the base pose the object was put down from (while it has not

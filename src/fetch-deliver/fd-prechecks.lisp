@@ -200,13 +200,17 @@ robot is put back. Returns THUNK's value, or T when there is no such object or r
 (defun object-regraspable-at-p (object pose)
   "True when OBJECT (an object designator of the belief state, held by the robot), standing
 free at POSE (map), can be grasped by the robot from where it stands, with any arm and any grasp
-a later fetch may use (REGRASP-GRASPS; CHECK-PICKING-UP-COLLISIONS). Checked in the belief state (CALL-WITH-OBJECT-LET-GO-AT)."
+a later fetch may use (REGRASP-GRASPS; CHECK-PICKING-UP-COLLISIONS), and is seen from there
+\(OBJECT-VISIBLE-FROM-P: the fetch perceives it again before it grasps it). Checked in the
+belief state (CALL-WITH-OBJECT-LET-GO-AT)."
   (call-with-object-let-go-at
    object pose
    (lambda (o)
      (declare (ignore o))
-     (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object)) t)
-       ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil)))))
+     (and (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object))
+                               t)
+            ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil))
+          (object-visible-from-p object (btr:pose (btr:get-robot-object)))))))
 
 (defparameter *placing-penetration* 0.01d0
   "Metres an object put down may reach into another body (the surface it is put on aside, the
