@@ -289,6 +289,7 @@ void for_each_rb(const Object &o, const std::function<void(btRigidBody *, int)> 
 int add_body(int wh, const double *pose, ShapeP s, double mass, const char *what);
 // Union of the AABBs of the bodies of o (or of its link `link`, -1 = all); false if it has none.
 bool union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi);
+void check_link_arg(const Object &o, int oh, int link);  // -1 or a link of an articulated one
 
 inline void decode_rb(const btCollisionObject *co, int &obj, int &link) {
   obj = co->getUserIndex();

@@ -190,11 +190,7 @@ int cn_object_local_aabb(int wh, int oh, int link, double *out) {
   return guard([&] {
     Object &o = world(wh).obj(oh);
     check_ptr(out, "AABB output");
-    if (o.kind == CN_BODY && link != -1)
-      fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, oh);
-    if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
-      fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
-           (int)o.link_rb.size() - 1, oh);
+    check_link_arg(o, oh, link);
     // each body's shapes, put into the frame of the object (or LINK): the box an upright
     // copy of it would have, whatever its pose now
     const btTransform inv = frame_pose(o, link).inverse();

@@ -604,6 +604,14 @@ int cn_object_get_collision_filter(int wh, int oh, int *out) {
 
 }  // extern "C"
 
+void cn::check_link_arg(const Object &o, int oh, int link) {
+  if (o.kind == CN_BODY && link != -1)
+    fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, oh);
+  if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
+    fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
+         (int)o.link_rb.size() - 1, oh);
+}
+
 bool cn::union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi) {
   lo = btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
   hi = -lo;
@@ -625,11 +633,7 @@ int cn_object_aabb(int wh, int oh, int link, double *out) {
   return guard([&] {
     Object &o = world(wh).obj(oh);
     check_ptr(out, "AABB output");
-    if (o.kind == CN_BODY && link != -1)
-      fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, oh);
-    if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
-      fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
-           (int)o.link_rb.size() - 1, oh);
+    check_link_arg(o, oh, link);
     btVector3 lo, hi;
     if (!union_aabb(o, link, lo, hi)) {
       btVector3 p = frame_pose(o, link).getOrigin();
