@@ -608,6 +608,11 @@ bool cn::union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi) {
   lo = btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
   hi = -lo;
   bool any = false;
+  if (link >= 0 && o.kind == CN_ARTICULATED) {  // that link's body alone
+    btRigidBody *rb = link < (int)o.link_rb.size() ? o.link_rb[link] : nullptr;
+    if (rb) rb->getCollisionShape()->getAabb(rb->getWorldTransform(), lo, hi);
+    return rb != nullptr;
+  }
   for_each_rb(o, [&](btRigidBody *rb, int l) {
     if (link >= 0 && l != link) return;
     btVector3 a, b;
