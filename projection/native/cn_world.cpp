@@ -34,6 +34,14 @@ World::World(const btVector3 &g) {
 }
 
 World::~World() {
+  // Drop every overlapping pair at once, from the end of the pair array: removing the bodies
+  // one by one below would otherwise search all pairs for each body's (quadratic in bodies).
+  btOverlappingPairCache *pairs = broadphase->getOverlappingPairCache();
+  btBroadphasePairArray &arr = pairs->getOverlappingPairArray();
+  for (int i = arr.size() - 1; i >= 0; --i) {
+    btBroadphaseProxy *a = arr[i].m_pProxy0, *b = arr[i].m_pProxy1;
+    pairs->removeOverlappingPair(a, b, dispatcher);
+  }
   for (Object *o : objects)
     if (o) {
       remove_object_bodies(*this, *o);
