@@ -221,3 +221,17 @@ boxes together make the whole object's box."
           (loop for k below 3
                 do (is (= (aref whole k) (reduce #'min boxes :key (lambda (b) (aref b k)))))
                    (is (= (aref whole (+ k 3)) (reduce #'max boxes :key (lambda (b) (aref b (+ k 3))))))))))))
+
+(test physics-sees-teleported-static-bodies
+  "A static box teleported under a falling box between simulations holds it up there, and
+teleported away lets it fall on: the physics works with the boxes where the bodies are now."
+  (with-world (w)
+    (let ((table (add-box w '(5 0 0 0 0 0 1) '(1 1 0.2)))
+          (box (add-box w '(0 0 0.5 0 0 0 1) '(0.2 0.2 0.2) :mass 1)))
+      (simulate w 0.05)
+      (set-object-pose w table '(0 0 0 0 0 0 1))
+      (simulate w 1)
+      (is (approx 0.2d0 (aref (object-pose w box) 2) 5d-3))
+      (set-object-pose w table '(5 0 0 0 0 0 1))
+      (simulate w 0.5)
+      (is (< (aref (object-pose w box) 2) -0.5d0)))))

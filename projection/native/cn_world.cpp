@@ -341,9 +341,14 @@ struct KinematicRest {
   btDiscreteDynamicsWorld *dw;
   std::vector<btCollisionObject *> slept;
   explicit KinematicRest(World &w) : dw(w.dw) {
-    dw->updateAabbs();  // all bounding boxes, before the kinematic bodies stop being updated
-    forget_stale_aabbs(w);
     btCollisionObjectArray &all = dw->getCollisionObjectArray();
+    // the bounding boxes of the bodies teleported since the last query, and of the dynamic
+    // bodies (the last steps moved them), before the kinematic bodies stop being updated; the
+    // others are what they were (updating every body moved each into the broadphase's dynamic
+    // tree and searched the trees for its pairs again, a third of a simulate call)
+    sync_aabbs(w);
+    for (int i = 0; i < all.size(); ++i)
+      if (!all[i]->isStaticOrKinematicObject()) dw->updateSingleAabb(all[i]);
     for (int i = 0; i < all.size(); ++i) {
       btCollisionObject *co = all[i];
       if (co->isKinematicObject() && co->getActivationState() == DISABLE_DEACTIVATION) {
