@@ -197,3 +197,41 @@
         (is (approx 0.6d0 (aref (object-aabb w r 0) 5) 3d-3)))
       (signals-naming ("corrupt.stl" "link 'a'")
         (add-urdf w "<robot name='m'><link name='a'><collision><geometry><mesh filename='package://cn_test_pkg/corrupt.stl'/></geometry></collision></link></robot>")))))
+
+(test link-aabbs-are-each-links-own
+  "OBJECT-AABB of one link of an articulated object is the box of that link's body alone (the
+finger's sphere where the finger is), of a link without a body its frame's origin; the links'
+boxes together make the whole object's box."
+  (with-world (w)
+    (let ((r (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0 1))))
+      (set-robot-joints w r (list (robot-joint-index w r "j1") (robot-joint-index w r "j2"))
+                        '(0.7d0 -0.4d0))
+      (let* ((finger (robot-link-index w r "finger"))
+             (tool (robot-link-index w r "tool"))
+             (box (object-aabb w r finger))
+             (centre (subseq (robot-link-pose w r finger) 0 3)))
+        (loop for k below 3
+              do (is (approx (- (elt centre k) 0.02d0) (aref box k) 1d-6))
+                 (is (approx (+ (elt centre k) 0.02d0) (aref box (+ k 3)) 1d-6)))
+        (is (equalp (object-aabb w r tool)
+                    (let ((o (subseq (robot-link-pose w r tool) 0 3))) (concatenate 'vector o o))))
+        (let ((whole (object-aabb w r))
+              (boxes (loop for l below (robot-link-count w r)
+                           when (robot-link-has-body-p w r l) collect (object-aabb w r l))))
+          (loop for k below 3
+                do (is (= (aref whole k) (reduce #'min boxes :key (lambda (b) (aref b k)))))
+                   (is (= (aref whole (+ k 3)) (reduce #'max boxes :key (lambda (b) (aref b (+ k 3))))))))))))
+
+(test physics-sees-teleported-static-bodies
+  "A static box teleported under a falling box between simulations holds it up there, and
+teleported away lets it fall on: the physics works with the boxes where the bodies are now."
+  (with-world (w)
+    (let ((table (add-box w '(5 0 0 0 0 0 1) '(1 1 0.2)))
+          (box (add-box w '(0 0 0.5 0 0 0 1) '(0.2 0.2 0.2) :mass 1)))
+      (simulate w 0.05)
+      (set-object-pose w table '(0 0 0 0 0 0 1))
+      (simulate w 1)
+      (is (approx 0.2d0 (aref (object-pose w box) 2) 5d-3))
+      (set-object-pose w table '(5 0 0 0 0 0 1))
+      (simulate w 0.5)
+      (is (< (aref (object-pose w box) 2) -0.5d0)))))

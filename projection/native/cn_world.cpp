@@ -34,6 +34,14 @@ World::World(const btVector3 &g) {
 }
 
 World::~World() {
+  // Drop every overlapping pair at once, from the end of the pair array: removing the bodies
+  // one by one below would otherwise search all pairs for each body's (quadratic in bodies).
+  btOverlappingPairCache *pairs = broadphase->getOverlappingPairCache();
+  btBroadphasePairArray &arr = pairs->getOverlappingPairArray();
+  for (int i = arr.size() - 1; i >= 0; --i) {
+    btBroadphaseProxy *a = arr[i].m_pProxy0, *b = arr[i].m_pProxy1;
+    pairs->removeOverlappingPair(a, b, dispatcher);
+  }
   for (Object *o : objects)
     if (o) {
       remove_object_bodies(*this, *o);
@@ -333,9 +341,14 @@ struct KinematicRest {
   btDiscreteDynamicsWorld *dw;
   std::vector<btCollisionObject *> slept;
   explicit KinematicRest(World &w) : dw(w.dw) {
-    dw->updateAabbs();  // all bounding boxes, before the kinematic bodies stop being updated
-    forget_stale_aabbs(w);
     btCollisionObjectArray &all = dw->getCollisionObjectArray();
+    // the bounding boxes of the bodies teleported since the last query, and of the dynamic
+    // bodies (the last steps moved them), before the kinematic bodies stop being updated; the
+    // others are what they were (updating every body moved each into the broadphase's dynamic
+    // tree and searched the trees for its pairs again, a third of a simulate call)
+    sync_aabbs(w);
+    for (int i = 0; i < all.size(); ++i)
+      if (!all[i]->isStaticOrKinematicObject()) dw->updateSingleAabb(all[i]);
     for (int i = 0; i < all.size(); ++i) {
       btCollisionObject *co = all[i];
       if (co->isKinematicObject() && co->getActivationState() == DISABLE_DEACTIVATION) {
@@ -616,6 +629,11 @@ bool cn::union_aabb(const Object &o, int link, btVector3 &lo, btVector3 &hi) {
   lo = btVector3(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
   hi = -lo;
   bool any = false;
+  if (link >= 0 && o.kind == CN_ARTICULATED) {  // that link's body alone
+    btRigidBody *rb = link < (int)o.link_rb.size() ? o.link_rb[link] : nullptr;
+    if (rb) rb->getCollisionShape()->getAabb(rb->getWorldTransform(), lo, hi);
+    return rb != nullptr;
+  }
   for_each_rb(o, [&](btRigidBody *rb, int l) {
     if (link >= 0 && l != link) return;
     btVector3 a, b;

@@ -178,22 +178,40 @@ beyond a limit means)."
 
 (defun %neck-angles-towards (robot joints camera target)
   (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0d0)) joints) robot)
-  (let ((values (mapcar (lambda (j) (declare (ignore j)) 0d0) joints)))
+  ;; per joint, what every step needs of it and of the URDF: (joint child-link axis index
+  ;; value); a step sets that one joint in the shim, clamped as SET-ROBOT-STATE-FROM-JOINTS does
+  (let ((steps (mapcar (lambda (j)
+                         (let ((urdf-joint (or (gethash j (cl-urdf:joints (btr:urdf robot)))
+                                               (projection-error "Joint ~s is not a joint of ~s."
+                                                                 j (btr:name robot)))))
+                           (list j (cl-urdf:name (cl-urdf:child urdf-joint))
+                                 (apply #'cl-transforms:make-3d-vector (cl-urdf:axis urdf-joint))
+                                 (btr:joint-index robot j) 0d0)))
+                       joints))
+        (world (btr:world-handle (btr:world robot)))
+        (handle (btr:object-handle robot))
+        (index (make-array 1 :element-type '(signed-byte 32)))
+        (value (make-array 1 :element-type 'double-float))
+        (forward-in-camera (cl-transforms:make-3d-vector 0 0 1)))
     (loop repeat 30
           for largest = 0d0
-          do (loop for j in joints for i from 0
-                   do (multiple-value-bind (axis) (joint-axis-and-origin robot j)
-                        (let* ((cam (btr:link-pose robot camera))
-                               (forward (v-rotate (cl-transforms:orientation cam)
-                                                  (cl-transforms:make-3d-vector 0 0 1)))
+          do (loop for step in steps
+                   do (destructuring-bind (j child axis i v) step
+                        (let* ((axis (cl-transforms:normalize-vector
+                                      (v-rotate (cl-transforms:orientation (btr:link-pose robot child))
+                                                axis)))
+                               (cam (btr:link-pose robot camera))
+                               (forward (v-rotate (cl-transforms:orientation cam) forward-in-camera))
                                (to (cl-transforms:v- target (cl-transforms:origin cam)))
-                               (delta (signed-angle forward to axis)))
-                          (setf largest (max largest (abs delta)))
-                          (setf (nth i values) (normalize-angle (+ (nth i values) delta)))
-                          (btr:set-robot-state-from-joints (list (list j (nth i values))) robot))))
+                               (delta (signed-angle forward to axis))
+                               (new (normalize-angle (+ v delta))))
+                          (setf largest (max largest (abs delta))
+                                (fifth step) new
+                                (aref index 0) i
+                                (aref value 0) (btr::clamp-to-joint-limits robot j new))
+                          (cram-native:set-robot-joints world handle index value))))
           until (< largest 1d-9))
-    values))
-
+    (mapcar #'fifth steps)))
 (defun apply-neck-joint-states (robot pairs)
   "Set the neck joints of PAIRS ((joint value)...) clamped to their limits; signals
 PTU-GOAL-NOT-REACHED after moving when a value had to be clamped by more than 1e-5."
