@@ -174,19 +174,41 @@ names it in errors."
           (funcall (pred-entry pred) m (cdr goal) cont)))))
 
 (defvar *compiled-goals* (make-hash-table :test 'eq :weakness :key :synchronized t)
-  "Goal term → (goal-function nvars . env) for goals without pre-bound variables, so that a
-query written as a constant is compiled once.")
+  "Goal term → (goal-function nvars . env) for goals without pre-bound variables that were
+asked more than once (a query written as a constant), so that they are compiled once.")
 
 (sb-ext:defglobal **last-compiled-goal** (cons nil nil)
   "(goal . entry) of the goal COMPILED-GOAL looked up last, so that repeating a query skips the
 table.")
 
+(sb-ext:defglobal **recent-goals** (make-array 16 :initial-element '(nil))
+  "(goal . entry) of the last goals compiled, most of them built afresh for one query and never
+asked again: a goal is put into *COMPILED-GOALS* when it is asked again while it is still here,
+so that the table holds the goals asked repeatedly only.")
+
+(declaim (type (cons fixnum null) **recent-goal-next**))
+(sb-ext:defglobal **recent-goal-next** (list 0)
+  "The slot of **RECENT-GOALS** the next compiled goal goes to.")
+
+(defun recent-goal-entry (goal)
+  "The entry of GOAL when it is among **RECENT-GOALS**, or NIL."
+  (let ((recent **recent-goals**))
+    (declare (type (simple-vector 16) recent))
+    (loop for i of-type fixnum below 16
+          for slot = (svref recent i)
+          when (eq (car slot) goal) return (cdr slot))))
+
 (defun compiled-goal (goal)
-  "The goal function, frame and environment of the constant source GOAL, cached by identity."
+  "The goal function, frame and environment of the source GOAL: compiled once when the same goal
+object is asked repeatedly (a constant query), else compiled for this query."
   (let ((entry (let ((last **last-compiled-goal**))
                  (if (and (eq (car last) goal) goal)
                      (cdr last)
-                     (let ((entry (gethash goal *compiled-goals*)))
+                     (let ((entry (or (gethash goal *compiled-goals*)
+                                      (let ((recent (and goal (recent-goal-entry goal))))
+                                        (when recent
+                                          (setf (gethash goal *compiled-goals*) recent))
+                                        recent))))
                        (when entry
                          (setf **last-compiled-goal** (cons goal entry)))
                        entry)))))
@@ -198,7 +220,8 @@ table.")
             (values fn frame env)))
         (multiple-value-bind (fn frame env) (compile-goal-term goal)
           (when (consp goal)
-            (setf (gethash goal *compiled-goals*) (list* fn (length frame) env)))
+            (let ((i (logand (sb-ext:atomic-incf (car **recent-goal-next**)) 15)))
+              (setf (svref **recent-goals** i) (cons goal (list* fn (length frame) env)))))
           (values fn frame env)))))
 
 (defun compile-goal-term (goal &optional extra-vars)

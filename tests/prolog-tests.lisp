@@ -322,3 +322,17 @@
                (values-of '?l `(and (take 5 ?gen ?first) (findall ?x (member ?x ?first) ?l))
                           `((?gen . ,naturals)))))
     (is (equal '(3) (values-of '?x `(once (member ?x ?gen) (> ?x 2)) `((?gen . ,naturals)))))))
+
+(test goals-compiled-once-when-asked-again
+  "A goal object asked repeatedly (a constant query) is compiled once and kept; goals built
+afresh for one query each are not kept; both give their solutions."
+  (let ((constant (list 'member '?x '(a b c)))
+        (before (hash-table-count cram-prolog::*compiled-goals*)))
+    (dotimes (i 200)
+      (let ((g (gensym)))
+        (is (equal (list g 'b) (mapcar (lambda (b) (cdr (assoc '?x b)))
+                                       (force-ll (prolog `(member ?x (,g b)))))))))
+    (is (<= (hash-table-count cram-prolog::*compiled-goals*) before))
+    (is (equal '(a b c) (mapcar (lambda (b) (cdr (assoc '?x b))) (force-ll (prolog constant)))))
+    (is (equal '(a b c) (mapcar (lambda (b) (cdr (assoc '?x b))) (force-ll (prolog constant)))))
+    (is (gethash constant cram-prolog::*compiled-goals*))))

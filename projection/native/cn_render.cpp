@@ -6,12 +6,22 @@
 #include <png.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 
 namespace cn {
 
 namespace {
+
+// llvmpipe (Mesa's software rasterizer behind OSMesa) hands every render to worker threads and
+// waits for them at a barrier. The renders here are small (a visibility query draws three
+// frames, the second only inside the target's rectangle): waking the workers and waiting for
+// them cost more than rasterizing in the calling thread, which gives the same pixels. Set when
+// the library is loaded, before the first context; a user's own LP_NUM_THREADS is kept.
+__attribute__((constructor)) void rasterize_in_calling_thread() {
+  setenv("LP_NUM_THREADS", "0", 0);
+}
 
 struct GLContext {
   OSMesaContext ctx = nullptr;

@@ -12,22 +12,38 @@ belief state after they ran.")
   "Hash table object name → joint and pose signature last written to TF, for the environment
 objects (unchanged ones are not written again). Bound per projection environment.")
 
-(defvar *tree-cache* (make-hash-table :test 'eq :weakness :key)
-  "CL-URDF:ROBOT → vector of (parent-link-index . child-link-index) for every joint.")
+(defstruct (link-layout (:constructor make-link-layout (names root tree)))
+  "What PUBLISH-OBJECT-LINKS needs of a URDF: the link names as a simple vector (in
+BTR:LINK-NAMES order), the index of the root link among them, and the (parent-index .
+child-index) pairs of every joint."
+  (names #() :type simple-vector)
+  (root nil)
+  (tree #() :type simple-vector))
+
+(defvar *layout-cache* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "CL-URDF:ROBOT → its LINK-LAYOUT.")
+
+(defun link-layout (robot)
+  "The LINK-LAYOUT of the URDF of the articulated object ROBOT (made once per URDF)."
+  (let ((model (btr:urdf robot)))
+    (or (gethash model *layout-cache*)
+        (setf (gethash model *layout-cache*)
+              (let ((names (coerce (btr:link-names robot) 'simple-vector))
+                    (index (make-hash-table :test 'equal)))
+                (loop for n across names for i from 0 do (setf (gethash n index) i))
+                (make-link-layout
+                 names
+                 (position (cl-urdf:name (cl-urdf:root-link model)) names :test #'string=)
+                 (coerce (loop for j being the hash-values of (cl-urdf:joints model)
+                               for p = (gethash (cl-urdf:name (cl-urdf:parent j)) index)
+                               for c = (gethash (cl-urdf:name (cl-urdf:child j)) index)
+                               when (and p c) collect (cons p c))
+                         'simple-vector)))))))
 
 (defun link-tree (robot)
   "The (parent-index . child-index) pairs of every joint of ROBOT's URDF, link indices as in
 BTR:LINK-NAMES."
-  (let ((model (btr:urdf robot)))
-    (or (gethash model *tree-cache*)
-        (setf (gethash model *tree-cache*)
-              (let ((index (make-hash-table :test 'equal)))
-                (loop for n in (btr:link-names robot) for i from 0 do (setf (gethash n index) i))
-                (coerce (loop for j being the hash-values of (cl-urdf:joints model)
-                              for p = (gethash (cl-urdf:name (cl-urdf:parent j)) index)
-                              for c = (gethash (cl-urdf:name (cl-urdf:child j)) index)
-                              when (and p c) collect (cons p c))
-                        'simple-vector))))))
+  (link-layout-tree (link-layout robot)))
 
 (defun link-poses-vector (robot)
   "All link poses of ROBOT as one double vector, 7 per link in BTR:LINK-NAMES order."
@@ -86,17 +102,18 @@ inverse(P) * C, translation and quaternion."
 (defun make-link-cache (object)
   "A cache for PUBLISH-OBJECT-LINKS of the articulated OBJECT: per link index, the last 7
 doubles written (NIL: none yet)."
-  (make-array (length (btr:link-names object)) :initial-element nil))
+  (make-array (length (link-layout-names (link-layout object))) :initial-element nil))
 
 (defun publish-object-links (transformer object parent-frame stamp &key skip cache)
   "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
 with the map) and every link under its parent link. Links of the same name as a link of the
 articulated object SKIP are left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is
 unchanged is not written again."
-  (let* ((names (coerce (btr:link-names object) 'simple-vector))
+  (let* ((layout (link-layout object))
+         (names (link-layout-names layout))
          (poses (link-poses-vector object))
-         (root (cl-urdf:name (cl-urdf:root-link (btr:urdf object))))
-         (root-i (position root names :test #'string=))
+         (root-i (link-layout-root layout))
+         (root (svref names root-i))
          (scratch (make-array 7 :element-type 'double-float)))
     (flet ((write-link (parent child-index relative)
              (let ((last (and cache (svref cache child-index))))
@@ -106,7 +123,7 @@ unchanged is not written again."
                  (when cache (setf (svref cache child-index) (copy-seq relative)))))))
       (unless (and skip (btr:link-exists-p skip root))
         (write-link parent-frame root-i (subseq poses (* 7 root-i) (* 7 (1+ root-i)))))
-      (loop for (p . c) across (link-tree object)
+      (loop for (p . c) across (link-layout-tree layout)
             unless (and skip (btr:link-exists-p skip (svref names c)))
               do (write-link (svref names p) c (relative-pose-into poses p c scratch))))
     object))
