@@ -22,9 +22,9 @@ around it)."
   "Fetch the perceived OBJECT: drive to ROBOT-LOCATION, turn towards LOOK-LOCATION, perceive
 the object again and pick it up with the first of ARMS and GRASPS (NIL: what picking up
 chooses). An object the robot put down itself and that has not moved since is first fetched
-from where it was put down from (PLACED-FROM-LOCATION). Retries: the next grasp (5), the next arm (1), a new base pose (50, the torso raised) on
-navigation, perception, reach or manipulation failures, re-perceiving and re-picking (2) on a
-misgrasp.
+from where it was put down from (PLACED-FROM-LOCATION). Retries: the next grasp (5), the
+next arm (1), a new base pose (50, the torso raised) on navigation, perception, reach or
+manipulation failures, re-perceiving and re-picking (2) on a misgrasp.
 Returns the object designator; FETCHING-FAILED when all are used up."
   (let ((?object object)
         (?robot-location (reset-or-nil robot-location))

@@ -47,8 +47,8 @@ for the arms, torso and grippers it was found with."
 (defun judge-base-pose (pose accept what)
   "(values accepted hits) for the robot standing at POSE: HITS, what it touches there, and
 ACCEPTED, NIL unless it is free there and ACCEPT (a function of the pose) accepts it (then
-ACCEPT's value). A pose judged before within *BASE-POSE-VERDICTS* for the same robot joints and WHAT (a list naming what ACCEPT
-checks) gives the same verdict without a check."
+ACCEPT's value). A pose judged before within *BASE-POSE-VERDICTS* for the same robot joints
+and WHAT (a list naming what ACCEPT checks) gives the same verdict without a check."
   (let ((key (and *base-pose-verdicts* (list* (base-pose-key pose) (robot-joints-key) what))))
     (multiple-value-bind (verdict found)
         (if key
@@ -67,9 +67,9 @@ checks) gives the same verdict without a check."
   "The projection pre-check of navigating: the first of up to *NAVIGATION-CHECK-SAMPLES*
 solutions of LOCATION (a location designator) at which the robot is free of collisions and
 that ACCEPT (a function of the base pose) accepts: the designator of that solution, equated
-with LOCATION, and ACCEPT's value there as a second value. Signals NAVIGATION-GOAL-IN-COLLISION when there is none. WHAT names what
-ACCEPT checks (a list, compared with EQUAL): verdicts are reused within
-WITH-BASE-POSE-VERDICTS for the same WHAT."
+with LOCATION, and ACCEPT's value there as a second value. Signals
+NAVIGATION-GOAL-IN-COLLISION when there is none. WHAT names what ACCEPT checks (a list,
+compared with EQUAL): verdicts are reused within WITH-BASE-POSE-VERDICTS for the same WHAT."
   (let ((current location))
     (loop repeat *navigation-check-samples*
           while current

@@ -324,9 +324,9 @@ back."
                                                   cram-tf:*fixed-frame* 0d0 base))))
          (unwind-protect
               (handler-case
-                  (cl-transforms-stamped:pose->pose-stamped
-                   cram-tf:*fixed-frame* 0d0
-                   (pp-plans:pose-in-map (desig:reference (check-placing-collisions object arm here))))
+                  (let ((accepted (check-placing-collisions object arm here)))
+                    (cl-transforms-stamped:pose->pose-stamped
+                     cram-tf:*fixed-frame* 0d0 (pp-plans:pose-in-map (desig:reference accepted))))
                 ((or common-fail:object-undeliverable desig:designator-error) () nil))
            ;; one costmap per candidate base pose: not kept in the cache
            (costmap:forget-designator-costmap here)))))))

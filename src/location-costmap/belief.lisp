@@ -169,7 +169,8 @@ metadata.  Grids are cached per environment pose and joint state."
                          ;; the link's own box turned as it stands (a table turned by a few
                          ;; degrees would block a larger box around it)
                          (let ((corners (link-footprint env i name)))
-                           (if (and (>= (length corners) 3) (not (axis-aligned-p corners (* 0.25d0 resolution))))
+                           (if (and (>= (length corners) 3)
+                                    (not (axis-aligned-p corners (* 0.25d0 resolution))))
                                (rasterise-polygon bits origin-x origin-y resolution corners padding)
                                (rasterise-box bits origin-x origin-y resolution
                                               (cl-transforms:x lo) (cl-transforms:y lo)
