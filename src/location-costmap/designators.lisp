@@ -222,9 +222,9 @@ unturned), so that an object held by its side can be put down from where the rob
          (for-object (and for (typep for 'desig:object-designator)
                           (object-designator-world-object for))))
     (multiple-value-bind (x0 y0 x1 y1 top) (surface-of surface)
+      (multiple-value-bind (margin lift)
+          (if for-object (object-footprint for-object) (values *surface-margin* 0d0))
       (let* ((costmap (make-location-costmap))
-             (margin (if for-object (object-footprint for-object) *surface-margin*))
-             (lift (if for-object (nth-value 1 (object-footprint for-object)) 0d0))
              (cx (/ (+ x0 x1) 2)) (cy (/ (+ y0 y1) 2))
              (items (supporting-items x0 y0 x1 y1 top for-object)))
         (register-cost-function costmap
@@ -238,7 +238,7 @@ unturned), so that an object held by its side can be put down from where the rob
         (register-orientation-generator costmap (if for-object
                                                     (make-quarter-turns-orientation-generator)
                                                     (make-identity-orientation-generator)))
-        costmap))))
+        costmap)))))
 
 ;;; ---- the Prolog interface ------------------------------------------------------------------------
 
