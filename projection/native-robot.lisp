@@ -18,6 +18,7 @@
 (defcn "cn_robot_get_joints" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_get_joint" :int (w :int) (r :int) (j :int) (out :pointer))
 (defcn "cn_robot_link_poses" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_link_colors" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
 (defcn "cn_robot_set_self_collision" :int (w :int) (r :int) (on :int))
 
@@ -160,6 +161,15 @@ Mimic joints follow their leader; fixed joints ignore the value."
     (declare (type dvec v))
     (with-vector-pointers ((p v))
       (ccall "cn_robot_link_poses" world robot p (floor (length v) 7)))
+    v))
+
+(defun robot-link-colors (world robot)
+  "The RGBA colour of every link of the articulated ROBOT (as OBJECT-COLOR gives each), as one
+DVEC, 4 per link in index order."
+  (let* ((n (ccall "cn_robot_num_links" world robot))
+         (v (make-dvec (* 4 n))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_link_colors" world robot p n))
     v))
 
 (defun robot-link-pose (world robot link &optional out)

@@ -235,3 +235,21 @@ teleported away lets it fall on: the physics works with the boxes where the bodi
       (set-object-pose w table '(5 0 0 0 0 0 1))
       (simulate w 0.5)
       (is (< (aref (object-pose w box) 2) -0.5d0)))))
+
+(test robot-link-colors-are-each-links-colour
+  "ROBOT-LINK-COLORS gives, 4 per link, what OBJECT-COLOR gives link by link: a link's own
+colour once set, else its visual's colour, else grey."
+  (with-world (w)
+    (let ((r (add-urdf w *arm-urdf*)))
+      (set-object-color w r '(0 0.5 1) (robot-link-index w r "lower"))
+      (let ((all (robot-link-colors w r)))
+        (is (= (* 4 (robot-link-count w r)) (length all)))
+        (dotimes (l (robot-link-count w r))
+          (is (equalp (object-color w r l) (subseq all (* 4 l) (* 4 (1+ l))))))
+        (is (equalp #(1d0 0d0 0d0 1d0) (subseq all (* 4 (robot-link-index w r "upper"))
+                                            (* 4 (1+ (robot-link-index w r "upper"))))))
+        (is (equalp #(0d0 0.5d0 1d0 1d0) (subseq all (* 4 (robot-link-index w r "lower"))
+                                              (* 4 (1+ (robot-link-index w r "lower"))))))
+        (is (equalp #(0.5d0 0.5d0 0.5d0 1d0) (subseq all (* 4 (robot-link-index w r "base"))
+                                                  (* 4 (1+ (robot-link-index w r "base"))))))))
+    (signals-naming ("rigid body") (robot-link-colors w (add-box w '(0 0 0 0 0 0 1) '(1 1 1))))))

@@ -98,6 +98,8 @@ int cn_object_get_poses(int world, const int *objs, int n, double *out7n);
 int cn_object_set_poses(int world, const int *objs, int n, const double *poses7n);
 int cn_object_set_color(int world, int obj, int link, double r, double g, double b, double a);
 int cn_object_get_color(int world, int obj, int link, double *out4);
+int cn_robot_link_colors(int world, int robot, double *out4, int cap); /* every link's colour as
+                                   cn_object_get_color gives it, 4 per link -> num links */
 int cn_object_set_collision_filter(int world, int obj, int group, int mask);
 int cn_object_get_collision_filter(int world, int obj, int *out2);
 int cn_object_aabb(int world, int obj, int link, double *out6);  /* min xyz, max xyz    */
