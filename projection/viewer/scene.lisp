@@ -87,7 +87,7 @@ Anything else is an error naming it."
 
 (defun mesh-id (path)
   "The id of the mesh file PATH (registered on first use)."
-  (let ((file (namestring (or (probe-file path)
+  (let ((file (namestring (or (btr::probe-file-again path)
                               (error "viewer: mesh file ~a does not exist" path)))))
     (or (gethash file *meshes*)
         (sb-ext:with-locked-hash-table (*meshes*)
