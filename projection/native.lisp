@@ -22,7 +22,7 @@
    #:add-urdf #:robot-name #:robot-link-count #:robot-joint-count #:robot-root-link
    #:robot-link-name #:robot-joint-name #:robot-link-names #:robot-joint-names
    #:robot-link-index #:robot-joint-index #:robot-joint-info #:robot-link-parent-joint
-   #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-joint #:robot-link-poses
+   #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-joint #:robot-link-poses #:robot-link-poses-if
    #:robot-link-pose #:set-robot-self-collision
    ;; queries
    #:world-contacts #:object-contacts #:closest-distance #:ignore-pair #:ray-test

@@ -167,6 +167,12 @@ int cn_robot_get_joints(int world, int robot, double *out, int cap);     /* -> n
 int cn_robot_get_joint(int world, int robot, int joint, double *out);  /* one joint's value */
 int cn_robot_link_poses(int world, int robot, double *out7, int cap);    /* -> num links  */
 int cn_robot_link_pose(int world, int robot, int link, double *out7);
+/* The poses of the nl links LINKS the robot's links would have with its nj joints JOINTS at
+ * VALUES (mimic joints following), its other joints and its base as they are: the poses
+ * cn_robot_set_joints and cn_robot_link_pose would give, computed the same way; nothing in the
+ * world changes. 7 doubles per link into out7. */
+int cn_robot_link_poses_if(int world, int robot, const int *joints, const double *values, int nj,
+                           const int *links, int nl, double *out7);
 int cn_robot_set_self_collision(int world, int robot, int enabled);      /* default off   */
 
 /* ---- collision queries ------------------------------------------------------------------- */
