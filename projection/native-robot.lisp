@@ -18,7 +18,10 @@
 (defcn "cn_robot_get_joints" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_get_joint" :int (w :int) (r :int) (j :int) (out :pointer))
 (defcn "cn_robot_link_poses" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_link_colors" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
+(defcn "cn_robot_link_poses_if" :int (w :int) (r :int) (j :pointer) (v :pointer) (nj :int)
+  (l :pointer) (nl :int) (out :pointer))
 (defcn "cn_robot_set_self_collision" :int (w :int) (r :int) (on :int))
 
 (defvar *urdf-foreign-strings* (make-hash-table :test 'eq :weakness :key :synchronized t)
@@ -160,6 +163,33 @@ Mimic joints follow their leader; fixed joints ignore the value."
     (declare (type dvec v))
     (with-vector-pointers ((p v))
       (ccall "cn_robot_link_poses" world robot p (floor (length v) 7)))
+    v))
+
+(defun robot-link-colors (world robot)
+  "The RGBA colour of every link of the articulated ROBOT (as OBJECT-COLOR gives each), as one
+DVEC, 4 per link in index order."
+  (let* ((n (ccall "cn_robot_num_links" world robot))
+         (v (make-dvec (* 4 n))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_link_colors" world robot p n))
+    v))
+
+(defun robot-link-poses-if (world robot joints values links &optional out)
+  "The world poses the LINKS (a sequence of link indices, an IVEC for speed) of ROBOT would have
+with its JOINTS (indices) at VALUES, the other joints and the base as they are: what
+SET-ROBOT-JOINTS then ROBOT-LINK-POSE would give, the world left unchanged. One DVEC (or OUT),
+7 per link in the order of LINKS."
+  (let* ((jv (to-ivec joints 'robot-link-poses-if "joint indices"))
+         (vv (to-dvec values nil 'robot-link-poses-if "joint values"))
+         (lv (to-ivec links 'robot-link-poses-if "link indices"))
+         (v (or out (make-dvec (* 7 (length lv))))))
+    (declare (type ivec jv lv) (type dvec vv v))
+    (unless (= (length jv) (length vv))
+      (arg-error 'robot-link-poses-if "~d joint indices but ~d values" (length jv) (length vv)))
+    (unless (>= (length v) (* 7 (length lv)))
+      (arg-error 'robot-link-poses-if "output of ~d doubles for ~d links" (length v) (length lv)))
+    (with-vector-pointers ((pj jv) (pv vv) (pl lv) (po v))
+      (ccall "cn_robot_link_poses_if" world robot pj pv (length jv) pl (length lv) po))
     v))
 
 (defun robot-link-pose (world robot link &optional out)

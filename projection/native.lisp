@@ -14,7 +14,7 @@
    #:world-body-count #:world-objects #:with-world
    ;; objects and bodies
    #:object-kind #:remove-object #:object-pose #:set-object-pose #:object-poses
-   #:set-object-poses #:object-color #:set-object-color #:object-collision-filter
+   #:set-object-poses #:object-color #:robot-link-colors #:set-object-color #:object-collision-filter
    #:set-object-collision-filter #:object-aabb #:object-local-aabb #:object-active-p
    #:add-plane #:add-box #:add-sphere #:add-cylinder #:add-cone #:add-mesh #:add-convex-hull
    #:body-velocity #:set-body-velocity #:body-mass #:body-shape
@@ -22,7 +22,7 @@
    #:add-urdf #:robot-name #:robot-link-count #:robot-joint-count #:robot-root-link
    #:robot-link-name #:robot-joint-name #:robot-link-names #:robot-joint-names
    #:robot-link-index #:robot-joint-index #:robot-joint-info #:robot-link-parent-joint
-   #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-joint #:robot-link-poses
+   #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-joint #:robot-link-poses #:robot-link-poses-if
    #:robot-link-pose #:set-robot-self-collision
    ;; queries
    #:world-contacts #:object-contacts #:closest-distance #:ignore-pair #:ray-test

@@ -231,3 +231,29 @@
                                          (btr:world-handle w) (btr:object-handle pusher)))))
         (is (btr:objects-in-contact-p w cup pusher)))))
   (signals btr:btr-error (btr:call-without-collisions 'no-such-object (lambda () t))))
+
+(test mesh-uris-resolve-to-the-file-as-it-is-now
+  "RESOLVE-URI gives the truename of the file a URI names, also when asked again, and follows a
+changed file: a file gone signals an error naming it, a symbolic link pointed elsewhere gives
+the new target."
+  (let* ((dir (uiop:ensure-directory-pathname
+               (format nil "/tmp/cram-plans-uri-test-~d/" (sb-posix:getpid))))
+         (a (merge-pathnames "a.stl" dir))
+         (b (merge-pathnames "b.stl" dir))
+         (link (merge-pathnames "mesh.stl" dir)))
+    (ensure-directories-exist dir)
+    (unwind-protect
+         (progn
+           (dolist (f (list a b))
+             (with-open-file (s f :direction :output :if-exists :supersede) (write-line "solid x" s)))
+           (sb-posix:symlink (namestring a) (namestring link))
+           (is (equal (truename a) (btr::resolve-uri (namestring link))))
+           (is (equal (truename a) (btr::resolve-uri (namestring link))))
+           (delete-file link)
+           (sb-posix:symlink (namestring b) (namestring link))
+           (is (equal (truename b) (btr::resolve-uri (namestring link))))
+           (delete-file link)
+           (let ((c (handler-case (progn (btr::resolve-uri (namestring link)) nil) (error (e) e))))
+             (is (typep c 'error))
+             (is (search "mesh.stl" (princ-to-string c)))))
+      (uiop:delete-directory-tree dir :validate t :if-does-not-exist :ignore))))

@@ -235,3 +235,44 @@ teleported away lets it fall on: the physics works with the boxes where the bodi
       (set-object-pose w table '(5 0 0 0 0 0 1))
       (simulate w 0.5)
       (is (< (aref (object-pose w box) 2) -0.5d0)))))
+
+(test robot-link-colors-are-each-links-colour
+  "ROBOT-LINK-COLORS gives, 4 per link, what OBJECT-COLOR gives link by link: a link's own
+colour once set, else its visual's colour, else grey."
+  (with-world (w)
+    (let ((r (add-urdf w *arm-urdf*)))
+      (set-object-color w r '(0 0.5 1) (robot-link-index w r "lower"))
+      (let ((all (robot-link-colors w r)))
+        (is (= (* 4 (robot-link-count w r)) (length all)))
+        (dotimes (l (robot-link-count w r))
+          (is (equalp (object-color w r l) (subseq all (* 4 l) (* 4 (1+ l))))))
+        (is (equalp #(1d0 0d0 0d0 1d0) (subseq all (* 4 (robot-link-index w r "upper"))
+                                            (* 4 (1+ (robot-link-index w r "upper"))))))
+        (is (equalp #(0d0 0.5d0 1d0 1d0) (subseq all (* 4 (robot-link-index w r "lower"))
+                                              (* 4 (1+ (robot-link-index w r "lower"))))))
+        (is (equalp #(0.5d0 0.5d0 0.5d0 1d0) (subseq all (* 4 (robot-link-index w r "base"))
+                                                  (* 4 (1+ (robot-link-index w r "base"))))))))
+    (signals-naming ("rigid body") (robot-link-colors w (add-box w '(0 0 0 0 0 0 1) '(1 1 1))))))
+
+(test link-poses-if-are-the-poses-after-setting-the-joints
+  "ROBOT-LINK-POSES-IF gives the poses the links would have with some joints set (a mimic
+joint following its leader), digit for digit the poses after setting them, and leaves the
+world as it was."
+  (with-world (w)
+    (let* ((r (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0.3 0.95)))
+           (j1 (robot-joint-index w r "j1")) (j2 (robot-joint-index w r "j2"))
+           (links (list (robot-link-index w r "finger") (robot-link-index w r "upper")
+                        (robot-link-index w r "base")))
+           (before (robot-link-poses w r)))
+      (set-robot-joints w r (list j1) '(0.4d0))
+      (let ((start (copy-seq (robot-link-poses w r)))
+            (what-if (robot-link-poses-if w r (list j1 j2) '(0.4d0 -0.7d0) links)))
+        (is (equalp start (robot-link-poses w r)))
+        (is (equalp #(0.4d0 0d0) (subseq (robot-joints w r) 0 2)))
+        (set-robot-joints w r (list j2) '(-0.7d0))
+        (is (equalp what-if (concatenate 'vector (loop for l in links
+                                                       append (coerce (robot-link-pose w r l) 'list)))))
+        (is (not (equalp before (robot-link-poses w r)))))
+      (signals-naming ("joint index 17") (robot-link-poses-if w r '(17) '(0.1) links))
+      (signals-naming ("link index 99") (robot-link-poses-if w r (list j1) '(0.1) '(99)))
+      (signals-naming ("j1" "NaN") (robot-link-poses-if w r (list j1) (list (nan)) links)))))

@@ -32,6 +32,28 @@
         (and crawl (fboundp crawl) (funcall crawl name)))
       (btr-fail "ROS package ~s not found: register it with BTR:REGISTER-ROS-PACKAGE or put it on ROS_PACKAGE_PATH" name)))
 
+(defvar *file-truenames* (make-hash-table :test 'equal :synchronized t)
+  "Native namestring of a file RESOLVE-URI found → (truename device inode). PROBE-FILE resolves
+every directory of a path (a system call each); one stat of the path tells whether it still
+names the same file, whose truename is then the one found before.")
+
+(defun file-identity (native-name)
+  "(device inode) of the file NATIVE-NAME names (symbolic links followed), or NIL."
+  (multiple-value-bind (ok device inode) (sb-unix:unix-stat native-name)
+    (and ok (list device inode))))
+
+(defun probe-file-again (path)
+  "PROBE-FILE of PATH, taken from *FILE-TRUENAMES* while PATH names the same file as then."
+  (let* ((name (sb-ext:native-namestring path))
+         (cached (gethash name *file-truenames*)))
+    (if (and cached (equal (file-identity name) (cdr cached)))
+        (car cached)
+        (let ((truename (probe-file path))
+              (identity (file-identity name)))
+          (when (and truename identity)
+            (setf (gethash name *file-truenames*) (cons truename identity)))
+          truename))))
+
 (defun resolve-uri (uri)
   "The local file of URI (package://PKG/path, file://path or a path); an error when missing."
   (let ((path (cond ((uiop:string-prefix-p "package://" uri)
@@ -41,7 +63,7 @@
                                         (ros-package-directory (subseq rest 0 slash)))))
                     ((uiop:string-prefix-p "file://" uri) (pathname (subseq uri 7)))
                     (t (pathname uri)))))
-    (or (probe-file path)
+    (or (probe-file-again path)
         (btr-fail "mesh file ~a (from ~s) does not exist" path uri))))
 
 (defvar *mesh-files* '()

@@ -207,6 +207,15 @@ max-vector): the axis-aligned box an unturned copy of it standing at the origin 
             (native:object-color (whandle object) (object-handle object) (or link -1)))
           'list))
 
+(defun link-colors (object)
+  "The RGBA colour of every link of the articulated OBJECT, as OBJECT-COLOR gives each: a
+simple vector of lists, indexed by link index."
+  (let ((v (with-live-object (object 'link-colors)
+             (native:robot-link-colors (whandle object) (object-handle object)))))
+    (coerce (loop for i from 0 below (length v) by 4
+                  collect (list (aref v i) (aref v (+ i 1)) (aref v (+ i 2)) (aref v (+ i 3))))
+            'simple-vector)))
+
 ;;; ---- object kinds -----------------------------------------------------------------------------
 
 (defvar *object-kinds* (make-hash-table :test 'eq)

@@ -563,6 +563,56 @@ int cn_robot_link_pose(int wh, int r, int link, double *out) {
   });
 }
 
+int cn_robot_link_poses_if(int wh, int r, const int *joints, const double *values, int nj,
+                           const int *links, int nl, double *out) {
+  return guard([&] {
+    Object &o = world(wh).robot(r);
+    const Model &m = *o.model;
+    if (nj < 0) fail(CN_E_ARG, "joint count %d, expected >= 0", nj);
+    if (nl < 0) fail(CN_E_ARG, "link count %d, expected >= 0", nl);
+    if (nj > 0) { check_ptr(joints, "joint index array"); check_ptr(values, "joint value array"); }
+    if (nl > 0) { check_ptr(links, "link index array"); check_ptr(out, "pose output"); }
+    const int njoints = (int)o.q.size(), nlinks = (int)m.links.size();
+    static thread_local std::vector<double> q;
+    q = o.q;
+    for (int i = 0; i < nj; ++i) {
+      if (joints[i] < 0 || joints[i] >= njoints)
+        fail(CN_E_HANDLE, "joint index %d (element %d) out of range 0..%d in articulated object %d",
+             joints[i], i, njoints - 1, r);
+      if (!std::isfinite(values[i]))
+        fail(CN_E_ARG, "value of joint '%s' (element %d) is %s, expected a finite number",
+             m.joints[joints[i]].name.c_str(), i, num(values[i]).c_str());
+      q[joints[i]] = values[i];
+    }
+    static thread_local std::vector<int> path;
+    for (int k = 0; k < nl; ++k) {
+      int link = links[k];
+      if (link < 0 || link >= nlinks)
+        fail(CN_E_HANDLE, "link index %d (element %d) out of range 0..%d in articulated object %d",
+             link, k, nlinks - 1, r);
+      // the joints from the root down to LINK; as ROBOT_FK_CHANGED, a link is computed again
+      // from its parent's pose when its joint's value differs or its parent was computed again
+      path.clear();
+      for (int l = link; m.links[l].parent_joint >= 0; l = m.joints[m.links[l].parent_joint].parent)
+        path.push_back(m.links[l].parent_joint);
+      btTransform pose = o.link_pose[m.root];
+      bool dirty = false;
+      for (auto it = path.rbegin(); it != path.rend(); ++it) {
+        const JointM &jm = m.joints[*it];
+        double v = joint_value(m, q, *it);
+        if (!dirty && v == joint_value(m, o.q, *it)) {
+          pose = o.link_pose[jm.child];
+        } else {
+          dirty = true;
+          pose = child_pose(jm, pose, v);
+        }
+      }
+      write_pose(pose, out + 7 * k);
+    }
+    return 0;
+  });
+}
+
 int cn_robot_set_self_collision(int wh, int r, int on) {
   return guard([&] {
     world(wh).robot(r).self_collision = on != 0;

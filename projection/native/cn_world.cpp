@@ -569,6 +569,16 @@ int cn_object_set_color(int wh, int oh, int link, double r, double g, double b, 
   });
 }
 
+// The colour a link of the articulated object O is drawn in: its own when one was set, else
+// its first visual's colour, else grey.
+static const float *link_color(const Object &o, int link) {
+  if (o.link_rgba[link][3] >= 0) return o.link_rgba[link].data();
+  static const float grey[4] = {0.5f, 0.5f, 0.5f, 1.0f};
+  for (auto &it : o.model->links[link].visual)
+    if (it.has_color) return it.rgba;
+  return grey;
+}
+
 int cn_object_get_color(int wh, int oh, int link, double *out) {
   return guard([&] {
     Object &o = world(wh).obj(oh);
@@ -578,16 +588,24 @@ int cn_object_get_color(int wh, int oh, int link, double *out) {
       if (link < 0 || link >= (int)o.link_rgba.size())
         fail(CN_E_HANDLE, "link index %d out of range 0..%d in articulated object %d", link,
              (int)o.link_rgba.size() - 1, oh);
-      if (o.link_rgba[link][3] >= 0) c = o.link_rgba[link].data();
-      else {
-        static const float grey[4] = {0.5f, 0.5f, 0.5f, 1.0f};
-        c = grey;
-        for (auto &it : o.model->links[link].visual)
-          if (it.has_color) { c = it.rgba; break; }
-      }
+      c = link_color(o, link);
     }
     for (int i = 0; i < 4; ++i) out[i] = c[i];
     return 0;
+  });
+}
+
+int cn_robot_link_colors(int wh, int r, double *out, int cap) {
+  return guard([&] {
+    Object &o = world(wh).robot(r);
+    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+    if (cap > 0) check_ptr(out, "colour output");
+    int n = (int)o.link_rgba.size();
+    for (int l = 0; l < n && l < cap; ++l) {
+      const float *c = link_color(o, l);
+      for (int i = 0; i < 4; ++i) out[4 * l + i] = c[i];
+    }
+    return n;
   });
 }
 

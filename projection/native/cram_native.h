@@ -98,6 +98,8 @@ int cn_object_get_poses(int world, const int *objs, int n, double *out7n);
 int cn_object_set_poses(int world, const int *objs, int n, const double *poses7n);
 int cn_object_set_color(int world, int obj, int link, double r, double g, double b, double a);
 int cn_object_get_color(int world, int obj, int link, double *out4);
+int cn_robot_link_colors(int world, int robot, double *out4, int cap); /* every link's colour as
+                                   cn_object_get_color gives it, 4 per link -> num links */
 int cn_object_set_collision_filter(int world, int obj, int group, int mask);
 int cn_object_get_collision_filter(int world, int obj, int *out2);
 int cn_object_aabb(int world, int obj, int link, double *out6);  /* min xyz, max xyz    */
@@ -165,6 +167,12 @@ int cn_robot_get_joints(int world, int robot, double *out, int cap);     /* -> n
 int cn_robot_get_joint(int world, int robot, int joint, double *out);  /* one joint's value */
 int cn_robot_link_poses(int world, int robot, double *out7, int cap);    /* -> num links  */
 int cn_robot_link_pose(int world, int robot, int link, double *out7);
+/* The poses of the nl links LINKS the robot's links would have with its nj joints JOINTS at
+ * VALUES (mimic joints following), its other joints and its base as they are: the poses
+ * cn_robot_set_joints and cn_robot_link_pose would give, computed the same way; nothing in the
+ * world changes. 7 doubles per link into out7. */
+int cn_robot_link_poses_if(int world, int robot, const int *joints, const double *values, int nj,
+                           const int *links, int nl, double *out7);
 int cn_robot_set_self_collision(int world, int robot, int enabled);      /* default off   */
 
 /* ---- collision queries ------------------------------------------------------------------- */

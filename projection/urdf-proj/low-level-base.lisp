@@ -178,40 +178,55 @@ beyond a limit means)."
 
 (defun %neck-angles-towards (robot joints camera target)
   (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0d0)) joints) robot)
-  ;; per joint, what every step needs of it and of the URDF: (joint child-link axis index
-  ;; value); a step sets that one joint in the shim, clamped as SET-ROBOT-STATE-FROM-JOINTS does
-  (let ((steps (mapcar (lambda (j)
-                         (let ((urdf-joint (or (gethash j (cl-urdf:joints (btr:urdf robot)))
-                                               (projection-error "Joint ~s is not a joint of ~s."
-                                                                 j (btr:name robot)))))
-                           (list j (cl-urdf:name (cl-urdf:child urdf-joint))
-                                 (apply #'cl-transforms:make-3d-vector (cl-urdf:axis urdf-joint))
-                                 (btr:joint-index robot j) 0d0)))
+  ;; Each step turns one joint and reads the poses of its child link and of the camera with
+  ;; the joints where the steps so far put them (clamped to their limits, as setting them in
+  ;; the shim does): the shim computes those poses as it would after setting the joints, without
+  ;; setting them (ROBOT-LINK-POSES-IF); the joints are set once, at the end.
+  (let* ((world (btr:world-handle (btr:world robot)))
+         (handle (btr:object-handle robot))
+         (urdf-joints (cl-urdf:joints (btr:urdf robot)))
+         ;; per joint: (joint child-link-index axis value)
+         (steps (mapcar (lambda (j)
+                          (let ((urdf-joint (or (gethash j urdf-joints)
+                                                (projection-error "Joint ~s is not a joint of ~s."
+                                                                  j (btr:name robot)))))
+                            (list j (btr:link-index robot (cl-urdf:name (cl-urdf:child urdf-joint)))
+                                  (apply #'cl-transforms:make-3d-vector (cl-urdf:axis urdf-joint))
+                                  0d0)))
+                        joints))
+         (joint-indices (map '(simple-array (signed-byte 32) (*))
+                             (lambda (j) (btr:joint-index robot j)) joints))
+         ;; the joints' values in the shim as the steps leave them: at first what the zeros
+         ;; were set to
+         (current (map '(simple-array double-float (*)) (lambda (j) (btr:joint-state robot j))
                        joints))
-        (world (btr:world-handle (btr:world robot)))
-        (handle (btr:object-handle robot))
-        (index (make-array 1 :element-type '(signed-byte 32)))
-        (value (make-array 1 :element-type 'double-float))
-        (forward-in-camera (cl-transforms:make-3d-vector 0 0 1)))
+         (links (make-array 2 :element-type '(signed-byte 32)
+                              :initial-element (btr:link-index robot camera)))
+         (poses (make-array 14 :element-type 'double-float))
+         (forward-in-camera (cl-transforms:make-3d-vector 0 0 1)))
     (loop repeat 30
           for largest = 0d0
           do (loop for step in steps
-                   do (destructuring-bind (j child axis i v) step
+                   for k from 0
+                   do (destructuring-bind (j child axis v) step
+                        (setf (aref links 0) child)
+                        (cram-native:robot-link-poses-if world handle joint-indices current links
+                                                         poses)
                         (let* ((axis (cl-transforms:normalize-vector
-                                      (v-rotate (cl-transforms:orientation (btr:link-pose robot child))
+                                      (v-rotate (cl-transforms:orientation (btr::vector->pose poses 0))
                                                 axis)))
-                               (cam (btr:link-pose robot camera))
+                               (cam (btr::vector->pose poses 7))
                                (forward (v-rotate (cl-transforms:orientation cam) forward-in-camera))
                                (to (cl-transforms:v- target (cl-transforms:origin cam)))
                                (delta (signed-angle forward to axis))
                                (new (normalize-angle (+ v delta))))
                           (setf largest (max largest (abs delta))
-                                (fifth step) new
-                                (aref index 0) i
-                                (aref value 0) (btr::clamp-to-joint-limits robot j new))
-                          (cram-native:set-robot-joints world handle index value))))
+                                (fourth step) new
+                                (aref current k) (btr::clamp-to-joint-limits robot j new)))))
           until (< largest 1d-9))
-    (mapcar #'fifth steps)))
+    (cram-native:set-robot-joints world handle joint-indices current)
+    (mapcar #'fourth steps)))
+
 (defun apply-neck-joint-states (robot pairs)
   "Set the neck joints of PAIRS ((joint value)...) clamped to their limits; signals
 PTU-GOAL-NOT-REACHED after moving when a value had to be clamped by more than 1e-5."

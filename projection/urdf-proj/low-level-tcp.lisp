@@ -90,10 +90,23 @@ distance. NIL when the robot has no movable torso."
                     (push limit values)))
                 (stable-sort (nreverse values) #'< :key (lambda (v) (abs (- v current)))))))))))
 
+(defvar *base-candidates* (cons nil nil)
+  "(offsets . candidates): the base offsets BASE-CANDIDATES sorted last, for a copy of the
+*BASE-OFFSETS* they were made of.")
+
 (defun base-candidates (move-base)
+  "The (dx dy) base offsets MOVE-TCP tries, nearest first: every pair of *BASE-OFFSETS* (made
+again only when *BASE-OFFSETS* changed), or only (0 0) without MOVE-BASE. Not to be modified."
   (if move-base
-      (stable-sort (loop for x in *base-offsets* append (loop for y in *base-offsets* collect (list x y)))
-                   #'< :key (lambda (o) (+ (expt (first o) 2) (expt (second o) 2))))
+      (let ((cached *base-candidates*))
+        (if (equal (car cached) *base-offsets*)
+            (cdr cached)
+            (let ((candidates
+                    (stable-sort (loop for x in *base-offsets*
+                                       append (loop for y in *base-offsets* collect (list x y)))
+                                 #'< :key (lambda (o) (+ (expt (first o) 2) (expt (second o) 2))))))
+              (setf *base-candidates* (cons (copy-list *base-offsets*) candidates))
+              candidates)))
       (list (list 0d0 0d0))))
 
 (defun offset-base-pose (pose dx dy)

@@ -45,9 +45,11 @@ child-index) pairs of every joint."
 BTR:LINK-NAMES."
   (link-layout-tree (link-layout robot)))
 
-(defun link-poses-vector (robot)
-  "All link poses of ROBOT as one double vector, 7 per link in BTR:LINK-NAMES order."
-  (cram-native:robot-link-poses (btr:world-handle (btr:world robot)) (btr:object-handle robot)))
+(defun link-poses-vector (robot &optional out)
+  "All link poses of ROBOT as one double vector, 7 per link in BTR:LINK-NAMES order (or into
+OUT)."
+  (cram-native:robot-link-poses (btr:world-handle (btr:world robot)) (btr:object-handle robot)
+                                out))
 
 (defun vector-transform (v i)
   "The CL-TRANSFORMS:TRANSFORM of pose number I of the pose vector V."
@@ -111,10 +113,13 @@ articulated object SKIP are left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a 
 unchanged is not written again."
   (let* ((layout (link-layout object))
          (names (link-layout-names layout))
-         (poses (link-poses-vector object))
+         ;; on the stack: read here only (what is kept is copied)
+         (poses (make-array (* 7 (length names)) :element-type 'double-float))
          (root-i (link-layout-root layout))
          (root (svref names root-i))
          (scratch (make-array 7 :element-type 'double-float)))
+    (declare (dynamic-extent poses))
+    (link-poses-vector object poses)
     (flet ((write-link (parent child-index relative)
              (let ((last (and cache (svref cache child-index))))
                (unless (and last (same-pose-vector-p last relative))

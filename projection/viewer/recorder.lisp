@@ -24,7 +24,8 @@ but the last few).")
   (start-unix 0d0 :type double-float)
   (steps (make-array 16 :adjustable t :fill-pointer 0))
   (descriptors (make-hash-table :test 'equal)) ; object name → descriptor (first seen)
-  (last-names nil))
+  (last-names nil)
+  (costmaps-dropped nil))          ; true once DROP-OLD-COSTMAPS went through this older run
 
 (defstruct (replay-step (:conc-name step-) (:constructor %make-step))
   "The belief state after one motion."
@@ -129,12 +130,16 @@ costmap is a grid of doubles; a household run samples hundreds): older runs keep
 
 (defun drop-old-costmaps ()
   "Forget the costmaps of the overlays of all but the *MAX-RUNS-WITH-COSTMAPS* newest runs, so
-that recording many long runs stays bounded."
+that recording many long runs stays bounded. A run older than the newest gets no steps any more:
+once gone through, it is not gone through again."
   (dolist (run (nthcdr *max-runs-with-costmaps* *runs*))
-    (loop for step across (run-steps run)
-          do (dolist (overlay (step-overlays step))
-               (when (and (hash-table-p overlay) (gethash "costmap" overlay))
-                 (setf (gethash "costmap" overlay) nil))))))
+    (unless (run-costmaps-dropped run)
+      (loop for step across (run-steps run)
+            do (dolist (overlay (step-overlays step))
+                 (when (and (hash-table-p overlay) (gethash "costmap" overlay))
+                   (setf (gethash "costmap" overlay) nil))))
+      (unless (eq run (first *runs*))
+        (setf (run-costmaps-dropped run) t)))))
 
 (defvar *max-recorded-costmaps* 24
   "How many overlays keep their location designator's costmap, all runs and pending overlays

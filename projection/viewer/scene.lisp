@@ -87,7 +87,7 @@ Anything else is an error naming it."
 
 (defun mesh-id (path)
   "The id of the mesh file PATH (registered on first use)."
-  (let ((file (namestring (or (probe-file path)
+  (let ((file (namestring (or (btr::probe-file-again path)
                               (error "viewer: mesh file ~a does not exist" path)))))
     (or (gethash file *meshes*)
         (sb-ext:with-locked-hash-table (*meshes*)
@@ -234,11 +234,11 @@ URDF, link colours and camera shares it.")
 
 (defun link-colours (robot description)
   "The colour of every link of ROBOT that has a visual in DESCRIPTION, in order."
-  (let ((seen '()))
+  (let ((colours (btr:link-colors robot)) (seen (make-hash-table)))
     (loop for (i) in (getf description :visuals)
-          unless (member i seen)
-            do (push i seen)
-            and collect (btr:object-color robot i))))
+          unless (gethash i seen)
+            do (setf (gethash i seen) t)
+            and collect (svref colours i))))
 
 (defun object-descriptor (object)
   "The JSON description of OBJECT (a BTR object) for the page: name, kind (body or

@@ -107,18 +107,19 @@ products of unit quaternions do: those need no renormalisation."
 
 (defun %unit-scale (x y z w original)
   "The factor that scales the quaternion of the double floats X Y Z W to unit norm. A zero or
-non-finite norm signals an error naming ORIGINAL (or the components)."
+non-finite norm signals an error naming what ORIGINAL, a function of no arguments, returns (or,
+with ORIGINAL NIL, the components)."
   (declare (type double-float x y z w) (optimize (speed 3) (safety 0) (debug 0)))
   (let ((n2 (+ (* x x) (* y y) (* z z) (* w w))))
     (if (and (> n2 1d-200) (finite-double-p n2))
         (/ 1d0 (sqrt n2))
-        (input-error (or original (list x y z w))
+        (input-error (if original (funcall (the function original)) (list x y z w))
                      "a quaternion with a non-zero, finite norm" 'make-quaternion))))
 
 (defun %unit-quaternion (x y z w &optional original)
   "A QUATERNION from the double floats X Y Z W scaled to unit norm (kept as they are when their
-norm is 1 to within rounding). A zero or non-finite norm signals an error naming ORIGINAL (or the
-components)."
+norm is 1 to within rounding). A zero or non-finite norm signals an error naming what ORIGINAL,
+a function of no arguments, returns (or the components)."
   (declare (type double-float x y z w) (optimize (speed 3) (safety 0) (debug 0)))
   (if (%unit-norm-p x y z w)
       (%make-quaternion x y z w)
@@ -134,11 +135,16 @@ A zero quaternion is not a rotation and signals TRANSFORM-INPUT-ERROR."
          (dz (ensure-double z "MAKE-QUATERNION z"))
          (dw (ensure-double w "MAKE-QUATERNION w"))
          (m (max (abs dx) (abs dy) (abs dz) (abs dw))))
+    ;; ENSURE-DOUBLE gives a double or signals: the arithmetic below is on doubles, unboxed
+    (declare (type double-float dx dy dz dw m))
     ;; components so large or so small that their squares overflow or vanish: the direction
     ;; is all that matters, so scale them first
     (when (and (or (> m 1d100) (< 0d0 m 1d-100)))
       (setf dx (/ dx m) dy (/ dy m) dz (/ dz m) dw (/ dw m)))
-    (%unit-quaternion dx dy dz dw (list x y z w))))
+    ;; the components as given, for the error only: not consed for every quaternion
+    (flet ((original () (list x y z w)))
+      (declare (dynamic-extent #'original))
+      (%unit-quaternion dx dy dz dw #'original))))
 
 (defun copy-3d-vector (vector &key x y z)
   "A 3D-VECTOR like VECTOR with the coordinates given by X, Y, Z replaced."
