@@ -80,6 +80,9 @@ but the last few).")
       (error "viewer: there is no recorded run ~s; recorded runs: ~{~d~^ ~}"
              id (mapcar #'run-id (recorded-runs)))))
 
+(defvar *overlays-with-costmaps* '()
+  "The overlays that still hold a costmap, newest first (at most *MAX-RECORDED-COSTMAPS*).")
+
 (defun clear-runs ()
   "Forget every recorded run."
   (sb-thread:with-mutex (*recorder-lock*)
@@ -147,9 +150,6 @@ together: when another costmap is noted, the oldest one kept is dropped (its sam
 costmap is a grid of doubles (0.7 MB in the kitchen) and a household run samples hundreds of
 one-off designators while it checks base poses, so keeping every costmap of a run filled the
 heap.")
-
-(defvar *overlays-with-costmaps* '()
-  "The overlays that still hold a costmap, newest first (at most *MAX-RECORDED-COSTMAPS*).")
 
 (defun keep-overlay-costmap (overlay)
   "Note that OVERLAY holds a costmap; drop the costmaps of the oldest overlays beyond
