@@ -711,6 +711,7 @@ fetching, delivering and transporting, with CRAM's retries and projection pre-ch
   :components ((:file "fd-package")
                (:file "fd-occasions")
                (:file "fd-placing-memory")
+               (:file "fd-fill-order")
                (:file "fd-prechecks")
                (:file "fd-navigation")
                (:file "fd-search")

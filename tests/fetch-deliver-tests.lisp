@@ -474,3 +474,59 @@ sink behind it; either way the held object ends where it was, attached to the sa
       (setf (car fd-plans::*placing-hint*)
             (cons (apply #'pose *robot-at-sink*) hint))
       (is (null (fd-plans::take-placing-hint))))))
+
+(test the-first-sample-that-scores-best-is-taken
+  (btw-tut:init-projection)
+  (flet ((x-of (d) (and d (cl-transforms:x (cl-transforms:origin
+                                            (pp-plans:pose-in-map (desig:reference d))))))
+         (target () (poses-location '(0.5 0 0.9) '(1.5 0 0.9) '(1.0 0 0.9))))
+    (let ((score (lambda (d) (if (> (x-of d) 0.7) 1 0))))
+      (is (= 0.5 (x-of (fd-plans::find-placing-sample (constantly t) (target) 3)))
+          "without a score, the first that passes")
+      (is (= 1.5 (x-of (fd-plans::find-placing-sample (constantly t) (target) 3
+                                                      :score score :best 1))))
+      (is (= 1.0 (x-of (fd-plans::find-placing-sample (lambda (d) (/= (x-of d) 1.5)) (target) 3
+                                                      :score score :best 1)))
+          "the first that passes and scores best")
+      (is (= 0.5 (x-of (fd-plans::find-placing-sample (constantly t) (target) 3
+                                                      :score (constantly 0) :best 1)))
+          "none scores best: the first with the highest score")
+      (is (null (fd-plans::find-placing-sample (constantly t) (target) 3
+                                               :score (constantly 0) :best 1 :require-best t)))
+      (is (null (fd-plans::find-placing-sample (constantly nil) (target) 3
+                                               :score score :best 1))))))
+
+(test an-object-is-put-down-leaving-room-for-the-objects-that-follow
+  ;; a cup will go within 6 cm of the island's origin: the bottle put down there, or 5 cm
+  ;; beside it, leaves it no room; 30 cm away, it does
+  (fetched-at-island)
+  (let* ((origin (cl-transforms:origin (btr:link-pose (btr:get-environment-object)
+                                                      "kitchen_island_surface")))
+         (ox (cl-transforms:x origin)) (oy (cl-transforms:y origin))
+         (?surface (desig:an object (type counter-top) (urdf-name kitchen-island-surface)
+                             (part-of iai-kitchen)))
+         (?cup (desig:an object (type cup)))
+         (fd-plans::*places-to-leave* (list (desig:a location (on ?surface) (for ?cup)
+                                                     (range 0.06))))
+         (bottle (desig:an object (type bottle) (name object-1))))
+    (setf (btr:pose (btr:get-robot-object))
+          (cl-transforms:make-pose (cl-transforms:make-3d-vector ox (- oy 0.55) 0)
+                                   (cl-transforms:axis-angle->quaternion
+                                    (cl-transforms:make-3d-vector 0 0 1) (/ pi 2))))
+    (flet ((room-after (dx dy)
+             (fd-plans::room-left bottle (poses-location (list (+ ox dx) (+ oy dy) 0.9)))))
+      (is (= 0 (room-after 0 0)))
+      (is (= 0 (room-after 0 0.05)))
+      (is (= 1 (room-after 0.3 0)))
+      (is (= 1 (room-after -0.3 0)))
+      (is (< (cl-transforms:v-dist (cl-transforms:origin (btr:pose (btr:get-robot-object)))
+                                   (cl-transforms:make-3d-vector ox (- oy 0.55) 0))
+             1d-9)
+          "the robot is put back")
+      (is-true (btr:attached-objects (btr:get-robot-object)) "the bottle is held again")))
+  (let ((fd-plans::*deliveries-to-come* '(:milk :cup :spoon)))
+    (is (= 3 (length (fd-plans::later-places nil :table-setting)))
+        "the places of the milk, the cup and the spoon on the table"))
+  (let ((fd-plans::*deliveries-to-come* '(:milk :bowl)))
+    (is (null (fd-plans::later-places nil :table-cleaning))
+        "the trash drawer and the dishwasher tray are no places on a surface")))

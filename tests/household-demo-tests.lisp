@@ -186,3 +186,18 @@ set: (values result-or-condition log ((type . position) ...))."
     (is (null (btr:attached-objects (btr:get-robot-object))) "the robot still holds something")
     (dolist (joint demos:*household-joints*)
       (is (< (abs (kitchen-joint joint)) 0.1) "~a is still open: ~a" joint (kitchen-joint joint)))))
+
+(test each-transport-knows-the-types-that-follow
+  ;; the cereal's place must leave room for the milk: each transport of the demo is told what
+  ;; comes after it (FD-PLANS::*DELIVERIES-TO-COME*)
+  (let ((seen '()))
+    (sb-int:encapsulate 'demos::transport 'record
+                        (lambda (fn type context)
+                          (declare (ignore fn))
+                          (push (list type context fd-plans::*deliveries-to-come*) seen)))
+    (unwind-protect (demos::transport-each '(:bowl :milk :spoon) :table-setting)
+      (sb-int:unencapsulate 'demos::transport 'record))
+    (is (equal '((:bowl :table-setting (:milk :spoon))
+                 (:milk :table-setting (:spoon))
+                 (:spoon :table-setting ()))
+               (reverse seen)))))

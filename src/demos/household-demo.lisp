@@ -95,6 +95,14 @@ parallel; failures are ignored."
          (desig:an action (type transporting) (object (desig:an object (type ?type)))
                    (context ?context))))))
 
+(defun transport-each (types context)
+  "Transport an object of each of TYPES in turn in CONTEXT, each knowing the types that follow
+\(FD-PLANS::*DELIVERIES-TO-COME*: each object is put down where it leaves the objects that
+follow room on the table)."
+  (loop for (type . later) on types
+        do (let ((fd-plans::*deliveries-to-come* later))
+             (transport type context))))
+
 (defvar *after-setting-hook* nil
   "A function called with no arguments when the table is set, before cleaning starts (NIL:
 none); the tests record the table state with it.")
@@ -143,11 +151,9 @@ are). No failure is caught. Returns the object list."
              (park-robot)
              ;; what is put on the table must be graspable there as the cleaning grasps it
              (let ((fd-plans::*regrasp-grasps* *cleaning-grasps*))
-               (dolist (type object-list)
-                 (transport type :table-setting)))
+               (transport-each object-list :table-setting))
              (when *after-setting-hook* (funcall *after-setting-hook*))
-             (dolist (type (reverse object-list))
-               (transport type :table-cleaning))
+             (transport-each (reverse object-list) :table-cleaning)
              (park-robot)))
       (setf btr:*visibility-threshold* threshold
             costmap:*restricted-area-function* restricted-area)))

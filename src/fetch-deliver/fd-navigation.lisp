@@ -121,19 +121,28 @@ else NIL. The hint is used up either way."
   "Park the arms (unless PARK-ARMS is NIL), pre-check LOCATION for a collision-free base pose
 (NAVIGATION-GOAL-IN-COLLISION when there is none) from which the object designator SEE (when
 given) is visible, the object designator GRASP (when given) can be grasped and PLACE (when
-given: (object arm target)) can be put down, and drive there.
+given: (object arm target)) can be put down, and drive there; while *PLACES-TO-LEAVE* is not
+empty, a base pose from which the object is put down leaving them room is looked for first.
 A low-level navigation failure is logged and ignored, as on a real base that plans around
 obstacles."
   (when park-arms
     (exe:perform (desig:an action (type parking-arms))))
   (multiple-value-bind (checked accepted)
-      (check-navigating-collisions
-       location :what (list (object-key see) (object-key grasp) (and place (place-key place)))
-                :accept (lambda (pose)
-                          (and (or (null see) (object-visible-from-p see pose))
-                               (or (null grasp) (object-graspable-from-p grasp pose))
-                               (or (null place)
-                                   (apply #'object-placeable-from-p (append place (list pose)))))))
+      (flet ((check ()
+               (check-navigating-collisions
+                location :what (list (object-key see) (object-key grasp)
+                                     (and place (place-key place)) *require-room*)
+                         :accept (lambda (pose)
+                                   (and (or (null see) (object-visible-from-p see pose))
+                                        (or (null grasp) (object-graspable-from-p grasp pose))
+                                        (or (null place)
+                                            (apply #'object-placeable-from-p
+                                                   (append place (list pose)))))))))
+        (if (and place *places-to-leave*)
+            ;; a base pose from which the object leaves the later objects room, else any
+            (handler-case (let ((*require-room* t)) (check))
+              (common-fail:navigation-goal-in-collision () (check)))
+            (check)))
     (let ((?location (desig:current-desig checked)))
       (when (and place *placing-hint*)
         ;; the sample of the target the check put the object down at from there

@@ -115,7 +115,8 @@ object can be grasped again there)."
 (defun check-placing-collisions (object arm target &key first)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
 which ARM puts OBJECT down free of collisions (the designator of that solution; samples beyond
-*PLACING-REACH* of the base are not tried): as CRAM's check, the hand reaches the approach,
+*PLACING-REACH* of the base are not tried; while *PLACES-TO-LEAVE* is not empty, the first that
+also leaves them room, see FIND-PLACING-SAMPLE): as CRAM's check, the hand reaches the approach,
 the put-down and the retreat poses (so the hand can also come back for the object the way it
 left). FIRST (a map pose, a sample of TARGET a pre-check accepted from where the robot stands)
 is tried before the others; when it passes, the result is a location designator of that pose,
@@ -126,11 +127,15 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
       (let* ((?pose first) (candidate (desig:a location (pose ?pose))))
         (when (placeable-at-p object arm candidate regrasp)
           (return-from check-placing-collisions (values candidate t)))))
-    (loop repeat *placing-check-samples*
-          for current = target then (desig:next-solution current)
-          while current
-          when (placeable-at-p object arm current regrasp)
-            do (return-from check-placing-collisions current))
+    (let ((found (find-placing-sample (lambda (candidate)
+                                        (placeable-at-p object arm candidate regrasp))
+                                      target *placing-check-samples*
+                                      :score (and *places-to-leave*
+                                                  (lambda (candidate)
+                                                    (room-left object candidate)))
+                                      :best (length *places-to-leave*)
+                                      :require-best *require-room*)))
+      (when found (return-from check-placing-collisions found)))
     (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
@@ -160,17 +165,21 @@ check (OBJECT-REGRASPABLE-AT-P) tries only those. Types not listed: any grasp.")
     (and type (second (assoc type *regrasp-grasps*
                              :test (lambda (a b) (string= (symbol-name a) (symbol-name b))))))))
 
-(defun regrasp-check-target-p (target)
-  "True when an object put down at TARGET (a location designator) must be graspable there
-again: *CHECK-REGRASPING* is on and TARGET is a place on a surface (ON it, or relative to an
-object there), neither stable (TARGET-STABLE-P: attachments, ABOVE) nor IN a container. A
-target of given poses (POSE, POSES) is the caller's choice and not checked."
-  (and *check-regrasping*
-       (typep target 'desig:location-designator)
+(defun surface-place-p (target)
+  "True when TARGET is a location designator of a place on a surface (ON it, or relative to an
+object there), neither stable (TARGET-STABLE-P: attachments, ABOVE) nor IN a container, nor
+given poses (POSE, POSES)."
+  (and (typep target 'desig:location-designator)
        (not (prop target :pose))
        (not (prop target :poses))
        (not (target-stable-p target))
        (not (prop target :in))))
+
+(defun regrasp-check-target-p (target)
+  "True when an object put down at TARGET (a location designator) must be graspable there
+again: *CHECK-REGRASPING* is on and TARGET is a place on a surface (SURFACE-PLACE-P). A target
+of given poses is the caller's choice and not checked."
+  (and *check-regrasping* (surface-place-p target)))
 
 (defun call-with-object-let-go-at (object pose thunk)
   "Call THUNK with OBJECT (an object designator of the belief state, held by the robot) let go

@@ -32,8 +32,8 @@
 search the delivery location's reference object when its pose is not certain and make the
 location accessible, the same for the search location, search the object, fetch it with ARMS
 and GRASPS, deliver it, then seal the search and the delivery location. On DELIVERING-FAILED
-the object is dropped at the sink and the failure propagates."
-  (declare (ignore context))
+the object is dropped at the sink and the failure propagates. The delivery leaves
+room for the objects of *DELIVERIES-TO-COME* (*PLACES-TO-LEAVE*)."
   (search-location-action delivery-location)
   (accessing-action delivery-location arms)
   (search-location-action search-location)
@@ -58,9 +58,10 @@ the object is dropped at the sink and the failure propagates."
           ((common-fail:delivering-failed (e)
              (log-fd :warn 'transport "~a~%Dropping the object at the sink." e)
              (drop-at-sink)))
-        (perform-with-goal (desig:an action (type delivering) (object ?held) (target ?target)
+        (let ((*places-to-leave* (later-places delivery-location context)))
+          (perform-with-goal (desig:an action (type delivering) (object ?held) (target ?target)
                                      (desig:when ?deliver-robot (robot-location ?deliver-robot)))
-                           `(cpoe:object-at-location ,?held ,delivery-location)))))
+                             `(cpoe:object-at-location ,?held ,delivery-location))))))
   (sealing-action search-location arms)
   (sealing-action delivery-location arms)
   (desig:current-desig object))

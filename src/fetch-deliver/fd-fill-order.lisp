@@ -1,0 +1,90 @@
+;;;; Room for what comes next. A table is set object by object, and each object's place is
+;;;; chosen when it is put down: the cereal, put down at just any place that passes, can take
+;;;; the last place within reach where the milk may go (both go within 0.2 m of the table's
+;;;; centre, on its front half), and a bowl put down near the table's edge leaves the spoon,
+;;;; which goes right of it, no place at all. Of the places that pass the placing pre-check,
+;;;; the first one that leaves each later object some room is taken.
+
+(in-package :cram-fetch-deliver-plans)
+
+(defvar *deliveries-to-come* '()
+  "The object types (keywords) that will be transported after the current object, in the same
+context, as a table is set object by object (the household demo binds it). A transport leaves
+room for those of them that go to places on a surface (*PLACES-TO-LEAVE*).")
+
+(defvar *places-to-leave* '()
+  "Location designators of places on a surface that objects put down after the current one
+will need (the destinations of *DELIVERIES-TO-COME*). While it is not empty, the placing
+pre-check (CHECK-PLACING-COLLISIONS) takes, of the samples that pass, the first that leaves
+each of these places room within the robot's reach (ROOM-LEFT); when none leaves every place
+room, the one that leaves the most places room.")
+
+(defparameter *room-needed* 0.0025d0
+  "Square metres of free places (cells of a later object's costmap within the robot's reach)
+that count as room for that object.")
+
+(defun later-places (destination context)
+  "The destinations in CONTEXT (from the object knowledge) of *DELIVERIES-TO-COME* that are
+places on a surface (not stable, not in a container, as the re-grasp check's targets) other
+than DESTINATION itself."
+  (loop for type in *deliveries-to-come*
+        for place = (ignore-errors
+                     (man-int:get-object-destination type (environment-name) nil context))
+        when (and place (not (eq place destination)) (surface-place-p place))
+          collect place))
+
+(defun free-area (location)
+  "The square metres of free cells (above 0) of the costmap of the location designator
+LOCATION; the costmap is computed for this count only and not kept."
+  (unwind-protect
+       (let* ((costmap (handler-case (costmap:designator-costmap location)
+                         (desig:designator-error () nil)))
+              (grid (and costmap (handler-case (costmap:get-cost-map costmap)
+                                   (costmap:invalid-probability-distribution () nil)))))
+         (if (null grid)
+             0d0
+             (* (expt (costmap:resolution costmap) 2)
+                (loop for i below (array-total-size grid)
+                      count (plusp (row-major-aref grid i))))))
+    (costmap:forget-designator-costmap location)))
+
+(defun room-left (object candidate)
+  "With OBJECT (held) put down at the current solution of the location designator CANDIDATE,
+how many of *PLACES-TO-LEAVE* keep at least *ROOM-NEEDED* of free places within reach of the
+robot's base where it stands (TARGET-REACHABLE-FROM)."
+  (let ((base (cl-transforms-stamped:pose->pose-stamped
+               cram-tf:*fixed-frame* 0d0 (btr:pose (btr:get-robot-object))))
+        (pose (pp-plans::placing-target-pose
+               object (pp-plans:object-designator-type object) candidate)))
+    (call-with-object-let-go-at
+     object pose
+     (lambda (o)
+       (declare (ignore o))
+       (count-if (lambda (place)
+                   (>= (free-area (target-reachable-from place base)) *room-needed*))
+                 *places-to-leave*)))))
+
+(defvar *require-room* nil
+  "When true, the placing pre-check takes only a sample that leaves every one of
+*PLACES-TO-LEAVE* room: NAVIGATE first looks for a base pose with such a sample, and only when
+there is none for one with the best sample there is.")
+
+(defun find-placing-sample (predicate target count &key score best require-best)
+  "The first of up to COUNT solutions of the location designator TARGET (each a designator of
+its equation chain), drawn one at a time in the costmap's order, that satisfies PREDICATE, or
+NIL. With SCORE (a function of a solution, a number), the first one that satisfies PREDICATE
+and scores BEST, else (unless REQUIRE-BEST) the first with the highest score among all COUNT
+solutions."
+  (let ((found nil) (found-score nil))
+    (loop repeat count
+          for current = target then (desig:next-solution current)
+          while current
+          when (funcall predicate current)
+            do (if (null score)
+                   (return-from find-placing-sample current)
+                   (let ((s (funcall score current)))
+                     (when (and best (>= s best))
+                       (return-from find-placing-sample current))
+                     (when (or (null found-score) (> s found-score))
+                       (setf found current found-score s)))))
+    (and (not require-best) found)))
