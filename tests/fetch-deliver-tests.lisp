@@ -530,3 +530,26 @@ sink behind it; either way the held object ends where it was, attached to the sa
   (let ((fd-plans::*deliveries-to-come* '(:milk :bowl)))
     (is (null (fd-plans::later-places nil :table-cleaning))
         "the trash drawer and the dishwasher tray are no places on a surface")))
+
+(test a-spoon-held-hanging-is-judged-where-it-comes-to-rest
+  ;; the re-grasp check judges a spoon put down from a hand that holds it hanging where it will
+  ;; lie, on the surface, not at the height its tip hangs down to
+  (btw-tut:init-projection)
+  (flet ((spawn (name turn)
+           (btr:add-object btr:*current-bullet-world* :mesh name
+                           (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 -3 1.5)
+                                                    (cl-transforms:axis-angle->quaternion
+                                                     (cl-transforms:make-3d-vector 0 1 0) turn))
+                           :mesh :spoon :mass 0.1 :types '(:spoon)))
+         (drop (name)
+           (let ((?name name))
+             (- 0.9d0 (cl-transforms:z (cl-transforms:origin
+                                        (fd-plans::resting-pose
+                                         (desig:an object (type spoon) (name ?name))
+                                         (cl-transforms:make-pose
+                                          (cl-transforms:make-3d-vector 1 1 0.9)
+                                          (cl-transforms:make-identity-rotation)))))))))
+    (spawn :hanging-spoon (/ pi 2))
+    (spawn :lying-spoon 0)
+    (is (< 0.085 (drop :hanging-spoon) 0.11) "half its length less half its thickness")
+    (is (< (drop :lying-spoon) 0.02))))

@@ -175,3 +175,25 @@ right arm. Returns the bottle's pose before the pick-up."
   (let ((rob-int:*robot-name* :pr2))
     (is (= 1.05 (costmap:costmap-metadata-value 'costmap:costmap-in-reach-distance))
         "without the user's group the PR2's own reach answers")))
+
+(test a-flat-object-is-grasped-with-the-fingertips-on-its-surface
+  ;; a spoon lies 2 cm high on the island: the hands closing in on it may touch the island top
+  ;; (the grasp's container links); a bottle standing there may not be grasped through it
+  (btw-tut:init-projection)
+  (flet ((spawn (name type x)
+           (btr:add-object btr:*current-bullet-world* :mesh name
+                           (cl-transforms:make-pose (cl-transforms:make-3d-vector x 1.75 0.9)
+                                                    (cl-transforms:make-identity-rotation))
+                           :mesh type :mass 0.1 :types (list type))))
+    (spawn :flat-spoon :spoon -1.2)
+    (spawn :standing-bottle :bottle -0.9))
+  (btr:simulate btr:*current-bullet-world* 100)
+  (is (< (- (bottom-z :flat-spoon) (link-top "kitchen_island_surface")) 0.01)
+      "the spoon came to rest on the island")
+  (is (equal '("kitchen_island_surface") (pp-plans::container-links :flat-spoon)))
+  (is (null (pp-plans::container-links :standing-bottle)))
+  (btr:add-object btr:*current-bullet-world* :mesh :floating-spoon
+                  (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.5 1.75 1.2)
+                                           (cl-transforms:make-identity-rotation))
+                  :mesh :spoon :mass 0.1 :types '(:spoon))
+  (is (null (pp-plans::container-links :floating-spoon)) "a spoon in the air rests on nothing"))

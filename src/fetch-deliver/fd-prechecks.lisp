@@ -206,14 +206,31 @@ robot is put back. Returns THUNK's value, or T when there is no such object or r
                    (declare (ignore n))
                    (btr:attach-object robot o :link link :loose loose :grasp grasp))))))))))
 
+(defun resting-pose (object pose)
+  "POSE (map), a costmap's sample for putting OBJECT (an object designator of the belief state,
+held) down upright, lowered to where OBJECT comes to rest: the sample's height above the
+surface is the larger of its upright height and its height as held (COSTMAP::OBJECT-FOOTPRINT),
+and a flat object held from below (a spoon) drops the difference when it is let go."
+  (let* ((name (designator-object-name object))
+         (o (and name (btr:object btr:*current-bullet-world* name))))
+    (if (null o)
+        pose
+        (let ((lift (nth-value 1 (costmap::object-footprint o)))
+              (upright (- (cl-transforms:z (btr:local-aabb o))))
+              (origin (cl-transforms:origin pose)))
+          (cl-transforms:make-pose
+           (cl-transforms:make-3d-vector (cl-transforms:x origin) (cl-transforms:y origin)
+                                         (- (cl-transforms:z origin) (max 0d0 (- lift upright))))
+           (cl-transforms:orientation pose))))))
+
 (defun object-regraspable-at-p (object pose)
-  "True when OBJECT (an object designator of the belief state, held by the robot), standing
-free at POSE (map), can be grasped by the robot from where it stands, with any arm and any grasp
+  "True when OBJECT (an object designator of the belief state, held by the robot), let go at
+POSE (map) and come to rest below it (RESTING-POSE), can be grasped by the robot from where it stands, with any arm and any grasp
 a later fetch may use (REGRASP-GRASPS; CHECK-PICKING-UP-COLLISIONS), and is seen from there
 \(OBJECT-VISIBLE-FROM-P: the fetch perceives it again before it grasps it). Checked in the
 belief state (CALL-WITH-OBJECT-LET-GO-AT)."
   (call-with-object-let-go-at
-   object pose
+   object (resting-pose object pose)
    (lambda (o)
      (declare (ignore o))
      (and (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object))

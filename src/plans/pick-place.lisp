@@ -133,15 +133,33 @@ alone when no joint above it moves (a table top)."
         (let ((root (moving-root link)))
           (if root (below root) (list link-name)))))))
 
+(defparameter *flat-object-height* 0.03d0
+  "Metres: an object no higher than this, resting on a surface (a spoon on the table), is
+grasped with the fingertips on the surface; the hands may touch the surface it rests on.")
+
+(defun flat-object-support-links (object env)
+  "The links of the environment ENV that OBJECT rests on (touching it, their tops below its
+origin) when OBJECT is no higher than *FLAT-OBJECT-HEIGHT* in its own frame; else NIL."
+  (multiple-value-bind (lo hi) (btr:local-aabb object)
+    (let ((middle (cl-transforms:z (cl-transforms:origin (btr:pose object)))))
+      (when (<= (- (cl-transforms:z hi) (cl-transforms:z lo)) *flat-object-height*)
+        (loop for (nil nil other other-link) in (cram-native:object-contacts
+                                                 (btr::world-handle btr:*current-bullet-world*)
+                                                 (btr:object-handle object) :threshold 0.005d0)
+              when (and (eql other (btr:object-handle env)) (>= other-link 0)
+                        (< (cl-transforms:z (nth-value 1 (btr:aabb env other-link))) middle))
+                collect (btr::link-name-of env other-link))))))
+
 (defun container-links (object-name)
   "The environment links around the object OBJECT-NAME when it lies in or on the environment:
-the moving parts of the links it is attached to (MOVING-PART-LINKS). NIL for an object not
-attached to the environment."
+the moving parts of the links it is attached to (MOVING-PART-LINKS), and for a flat object the
+surface it rests on (FLAT-OBJECT-SUPPORT-LINKS). NIL for an object in neither case."
   (let* ((env (btr:get-environment-object))
          (object (btr:object btr:*current-bullet-world* object-name)))
     (when (and env object)
-      (remove-duplicates (loop for link in (btr:object-attached env object)
-                               append (moving-part-links link env))
+      (remove-duplicates (append (loop for link in (btr:object-attached env object)
+                                       append (moving-part-links link env))
+                                 (flat-object-support-links object env))
                          :test #'string=))))
 
 (defmacro with-object-being-grasped ((object) &body body)
