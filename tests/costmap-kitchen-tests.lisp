@@ -148,6 +148,36 @@
             (is (not (costmap:occupied-p grid (+ (cl-transforms:x lo) 0.05) (+ (cl-transforms:y lo) 0.05))))
             (is (not (costmap:occupied-p grid (- (cl-transforms:x hi) 0.05) (- (cl-transforms:y hi) 0.05))))))))))
 
+(test places-on-a-turned-surface-lie-on-it
+  ;; the kitchen turned by 0.4 rad: (on island) places lie on the island's turned top, shrunk
+  ;; by the margin, not in the corners of the larger box around it in the map
+  (in-kitchen
+    (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
+           (name "kitchen_island_surface")
+           (index (position name (btr:link-names kitchen) :test #'string=))
+           (straight (costmap::link-top-function kitchen name 0.05d0)))
+      (multiple-value-bind (lo hi) (btr:aabb kitchen index)
+        (is (= 1 (funcall straight (+ (cl-transforms:x lo) 0.06) (+ (cl-transforms:y lo) 0.06)))
+            "unturned: the box in the map, shrunk by the margin")
+        (is (= 0 (funcall straight (+ (cl-transforms:x lo) 0.04) (+ (cl-transforms:y lo) 0.06)))))
+      (setf (btr:pose kitchen)
+            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                     (cl-transforms:axis-angle->quaternion
+                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (let ((top (costmap::link-top-function kitchen name 0.05d0))
+            (centre (cl-transforms:origin (btr:link-pose kitchen name))))
+        (multiple-value-bind (lo hi) (btr:aabb kitchen index)
+          (is (= 1 (funcall top (cl-transforms:x centre) (cl-transforms:y centre))))
+          (is (= 0 (funcall top (+ (cl-transforms:x lo) 0.06) (+ (cl-transforms:y lo) 0.06))))
+          (is (= 0 (funcall top (- (cl-transforms:x hi) 0.06) (- (cl-transforms:y hi) 0.06)))))
+        ;; every sample of an ON designator lies on the turned top
+        (let* ((?surface (desig:an object (type counter-top) (urdf-name kitchen-island-surface)
+                                   (part-of iai-kitchen)))
+               (costmap (costmap:designator-costmap (desig:a location (on ?surface)))))
+          (is (every (lambda (point)
+                       (= 1 (funcall top (cl-transforms:x point) (cl-transforms:y point))))
+                     (loop repeat 50 collect (costmap:gen-costmap-sample-point costmap)))))))))
+
 ;;; ---- visible-for -----------------------------------------------------------------------------------
 
 (test visible-for-mug-over-20-seeds

@@ -87,6 +87,43 @@ turned about the vertical, its turned rectangle, not the larger box around it in
                                 (< (abs (- (second c) y1)) tolerance))))
            corners)))
 
+(defun link-top-function (env link margin)
+  "A cost function that is 1 on the top of the link LINK (a name) of ENV shrunk by MARGIN on
+every side (at least its centre lines), 0 elsewhere: the link's own box as it stands, so that
+on a table turned about the vertical no place lies beyond its edge (its box in the map reaches
+past the edges). For a link along the map's axes, its box in the map, as before."
+  (let* ((index (position link (btr:link-names env) :test #'string=))
+         (corners (link-footprint env index link)))
+    (multiple-value-bind (lo hi) (btr:aabb env index)
+      (if (axis-aligned-p corners 0.005d0)
+          (let ((x0 (cl-transforms:x lo)) (y0 (cl-transforms:y lo))
+                (x1 (cl-transforms:x hi)) (y1 (cl-transforms:y hi)))
+            (let ((cx (/ (+ x0 x1) 2)) (cy (/ (+ y0 y1) 2)))
+              (make-rectangle-cost-function (min cx (+ x0 margin)) (min cy (+ y0 margin))
+                                            (max cx (- x1 margin)) (max cy (- y1 margin)))))
+          (multiple-value-bind (llo lhi) (btr:local-aabb env index)
+            (let* ((pose (btr:link-pose env link))
+                   (axis (cl-transforms:rotate (cl-transforms:orientation pose)
+                                               (cl-transforms:make-3d-vector 1 0 0)))
+                   (yaw (atan (cl-transforms:y axis) (cl-transforms:x axis)))
+                   (c (cos yaw)) (s (sin yaw))
+                   (ox (cl-transforms:x (cl-transforms:origin pose)))
+                   (oy (cl-transforms:y (cl-transforms:origin pose)))
+                   (mx (/ (+ (cl-transforms:x llo) (cl-transforms:x lhi)) 2))
+                   (my (/ (+ (cl-transforms:y llo) (cl-transforms:y lhi)) 2))
+                   (x0 (min mx (+ (cl-transforms:x llo) margin)))
+                   (x1 (max mx (- (cl-transforms:x lhi) margin)))
+                   (y0 (min my (+ (cl-transforms:y llo) margin)))
+                   (y1 (max my (- (cl-transforms:y lhi) margin))))
+              (make-cost-function
+               (lambda (x y)
+                 (let* ((dx (- x ox)) (dy (- y oy))
+                        (lx (+ (* c dx) (* s dy))) (ly (- (* c dy) (* s dx))))
+                   (if (and (<= x0 lx x1) (<= y0 ly y1)) 1d0 0d0)))
+               :name 'link-top
+               :bounds (list (cl-transforms:x lo) (cl-transforms:y lo)
+                             (cl-transforms:x hi) (cl-transforms:y hi)))))))))
+
 (defun rasterise-polygon (bits origin-x origin-y resolution corners padding)
   "Mark the cells of BITS whose centres are within PADDING of the convex polygon CORNERS
 \((x y) ..., counter-clockwise)."

@@ -221,15 +221,18 @@ unturned), so that an object held by its side can be put down from where the rob
   (let* ((for (desig:desig-prop-value designator :for))
          (for-object (and for (typep for 'desig:object-designator)
                           (object-designator-world-object for))))
-    (multiple-value-bind (x0 y0 x1 y1 top) (surface-of surface)
+    (multiple-value-bind (x0 y0 x1 y1 top env link) (surface-of surface)
       (multiple-value-bind (margin lift)
           (if for-object (object-footprint for-object) (values *surface-margin* 0d0))
       (let* ((costmap (make-location-costmap))
              (cx (/ (+ x0 x1) 2)) (cy (/ (+ y0 y1) 2))
              (items (supporting-items x0 y0 x1 y1 top for-object)))
         (register-cost-function costmap
-                                (make-rectangle-cost-function (min cx (+ x0 margin)) (min cy (+ y0 margin))
-                                                              (max cx (- x1 margin)) (max cy (- y1 margin)))
+                                (if link
+                                    (link-top-function env link margin)
+                                    (make-rectangle-cost-function
+                                     (min cx (+ x0 margin)) (min cy (+ y0 margin))
+                                     (max cx (- x1 margin)) (max cy (- y1 margin))))
                                 'on-surface 0)
         (when items
           (register-cost-function costmap (items-free-space-function items margin)

@@ -180,8 +180,12 @@ quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION
                'relation-free-space 5))))
         (unless (some (lambda (key) (desig:desig-prop-value designator key)) '(:on :in :above))
           (let ((support (relation-support-body designator)))
-            (register-cost-function costmap (shrunk-box-function (body-lo support) (body-hi support)
-                                                                 (or for-half 0d0))
+            (register-cost-function costmap
+                                    (if (body-link support)
+                                        (link-top-function (body-object support) (body-link support)
+                                                           (or for-half 0d0))
+                                        (shrunk-box-function (body-lo support) (body-hi support)
+                                                             (or for-half 0d0)))
                                     'supporting-object 9)
             (register-height-generator costmap (make-constant-height-function
                                                 (+ (cl-transforms:z (body-hi support)) for-lift)))

@@ -165,17 +165,17 @@ robot ROBOT-NAME, from the belief state; 0 when the robot is not there."
     (symbol (substitute #\_ #\- (string-downcase (symbol-name value))))))
 
 (defun surface-of (designator &optional (world btr:*current-bullet-world*))
-  "(values x-min y-min x-max y-max top object) of the surface an object DESIGNATOR names: the
-link URDF-NAME of the environment PART-OF (default: the environment), or a belief-state object
-by NAME."
+  "(values x-min y-min x-max y-max top object link) of the surface an object DESIGNATOR names:
+the link URDF-NAME of the environment PART-OF (default: the environment; LINK is its name), or
+a belief-state object by NAME (LINK NIL)."
   (unless (typep designator 'desig:object-designator)
     (error "ON: expected an object designator such as (an object (type counter-top) (urdf-name ~
             sink-area-surface) (part-of iai-kitchen)), got ~s." designator))
   (let ((urdf-name (desig:desig-prop-value designator :urdf-name))
         (part-of (desig:desig-prop-value designator :part-of)))
-    (flet ((box (lo hi object)
+    (flet ((box (lo hi object &optional link)
              (values (cl-transforms:x lo) (cl-transforms:y lo) (cl-transforms:x hi)
-                     (cl-transforms:y hi) (cl-transforms:z hi) object)))
+                     (cl-transforms:y hi) (cl-transforms:z hi) object link)))
       (cond (urdf-name
              (let* ((env (if part-of
                              (or (find-world-object part-of world)
@@ -193,7 +193,7 @@ by NAME."
                    (error "ON: ~s (from URDF-NAME ~s) is not a link of ~s." link urdf-name
                           (btr:name env)))
                  (multiple-value-bind (lo hi) (btr:aabb env index)
-                   (box lo hi env)))))
+                   (box lo hi env link)))))
             (t (let ((object (object-designator-world-object designator world)))
                  (unless object
                    (error "ON: ~a names no link (URDF-NAME) and no object of the belief state."
