@@ -4,7 +4,7 @@
   (:use :cl)
   (:export #:now-seconds #:median-seconds #:time-per-call #:run-peer #:add-row #:print-table
            #:define-benchmark #:run-benchmarks #:format-seconds #:load-tool
-           #:move-bottle-seconds))
+           #:move-bottle-seconds #:*tools-directory*))
 
 (in-package :cram-bench)
 
