@@ -33,9 +33,15 @@ than DESTINATION itself."
         when (and place (not (eq place destination)) (surface-place-p place))
           collect place))
 
-(defun free-area (location)
+(defparameter *room-reach* 0.85d0
+  "Metres (horizontally) from the robot's base within which a later object's free places count
+as room for it (ROOM-LEFT): farther places are within the costmaps' reach but seldom within
+the arm's once the object must also be grasped there again.")
+
+(defun free-area (location base)
   "The square metres of free cells (above 0) of the costmap of the location designator
-LOCATION; the costmap is computed for this count only and not kept."
+LOCATION within *ROOM-REACH* of the map point BASE; the costmap is computed for this count only
+and not kept."
   (unwind-protect
        (let* ((costmap (handler-case (costmap:designator-costmap location)
                          (desig:designator-error () nil)))
@@ -43,15 +49,24 @@ LOCATION; the costmap is computed for this count only and not kept."
                                    (costmap:invalid-probability-distribution () nil)))))
          (if (null grid)
              0d0
-             (* (expt (costmap:resolution costmap) 2)
-                (loop for i below (array-total-size grid)
-                      count (plusp (row-major-aref grid i))))))
+             (let ((bx (cl-transforms:x base)) (by (cl-transforms:y base))
+                   (reach2 (expt *room-reach* 2)))
+               (* (expt (costmap:resolution costmap) 2)
+                  (loop for row below (array-dimension grid 0)
+                        for dy2 = (expt (- (costmap::cell-center-y costmap row) by) 2)
+                        sum (if (> dy2 reach2)
+                                0
+                                (loop for column below (array-dimension grid 1)
+                                      count (and (plusp (aref grid row column))
+                                                 (<= (+ dy2 (expt (- (costmap::cell-center-x
+                                                                      costmap column) bx) 2))
+                                                     reach2)))))))))
     (costmap:forget-designator-costmap location)))
 
 (defun room-left (object candidate)
   "With OBJECT (held) put down at the current solution of the location designator CANDIDATE,
-how many of *PLACES-TO-LEAVE* keep at least *ROOM-NEEDED* of free places within reach of the
-robot's base where it stands (TARGET-REACHABLE-FROM)."
+how many of *PLACES-TO-LEAVE* keep at least *ROOM-NEEDED* of free places within *ROOM-REACH*
+of the robot's base where it stands."
   (let ((base (cl-transforms-stamped:pose->pose-stamped
                cram-tf:*fixed-frame* 0d0 (btr:pose (btr:get-robot-object))))
         (pose (pp-plans::placing-target-pose
@@ -61,7 +76,9 @@ robot's base where it stands (TARGET-REACHABLE-FROM)."
      (lambda (o)
        (declare (ignore o))
        (count-if (lambda (place)
-                   (>= (free-area (target-reachable-from place base)) *room-needed*))
+                   (>= (free-area (target-reachable-from place base)
+                                  (cl-transforms:origin base))
+                       *room-needed*))
                  *places-to-leave*)))))
 
 (defvar *require-room* nil
