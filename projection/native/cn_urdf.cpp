@@ -496,6 +496,20 @@ int cn_robot_link_has_body(int wh, int r, int link) {
   return guard([&] { return robot_link(world(wh), r, link).link_rb[link] ? 1 : 0; });
 }
 
+// Each of JOINTS[0..N) a joint index of articulated object O (handle R), each of VALUES finite.
+static void check_joint_values(const Object &o, int r, const int *joints, const double *values,
+                               int n) {
+  const int nj = (int)o.q.size();
+  for (int i = 0; i < n; ++i) {
+    if (joints[i] < 0 || joints[i] >= nj)
+      fail(CN_E_HANDLE, "joint index %d (element %d) out of range 0..%d in articulated object %d",
+           joints[i], i, nj - 1, r);
+    if (!std::isfinite(values[i]))
+      fail(CN_E_ARG, "value of joint '%s' (element %d) is %s, expected a finite number",
+           o.model->joints[joints[i]].name.c_str(), i, num(values[i]).c_str());
+  }
+}
+
 int cn_robot_set_joints(int wh, int r, const int *joints, const double *values, int n) {
   return guard([&] {
     World &w = world(wh);
@@ -504,15 +518,7 @@ int cn_robot_set_joints(int wh, int r, const int *joints, const double *values, 
     if (n == 0) return 0;
     check_ptr(joints, "joint index array");
     check_ptr(values, "joint value array");
-    int nj = (int)o.q.size();
-    for (int i = 0; i < n; ++i) {
-      if (joints[i] < 0 || joints[i] >= nj)
-        fail(CN_E_HANDLE, "joint index %d (element %d) out of range 0..%d in articulated object %d",
-             joints[i], i, nj - 1, r);
-      if (!std::isfinite(values[i]))
-        fail(CN_E_ARG, "value of joint '%s' (element %d) is %s, expected a finite number",
-             o.model->joints[joints[i]].name.c_str(), i, num(values[i]).c_str());
-    }
+    check_joint_values(o, r, joints, values, n);
     static thread_local std::vector<double> old_q;
     old_q = o.q;
     for (int i = 0; i < n; ++i) o.q[joints[i]] = values[i];
@@ -572,18 +578,11 @@ int cn_robot_link_poses_if(int wh, int r, const int *joints, const double *value
     if (nl < 0) fail(CN_E_ARG, "link count %d, expected >= 0", nl);
     if (nj > 0) { check_ptr(joints, "joint index array"); check_ptr(values, "joint value array"); }
     if (nl > 0) { check_ptr(links, "link index array"); check_ptr(out, "pose output"); }
-    const int njoints = (int)o.q.size(), nlinks = (int)m.links.size();
+    const int nlinks = (int)m.links.size();
     static thread_local std::vector<double> q;
     q = o.q;
-    for (int i = 0; i < nj; ++i) {
-      if (joints[i] < 0 || joints[i] >= njoints)
-        fail(CN_E_HANDLE, "joint index %d (element %d) out of range 0..%d in articulated object %d",
-             joints[i], i, njoints - 1, r);
-      if (!std::isfinite(values[i]))
-        fail(CN_E_ARG, "value of joint '%s' (element %d) is %s, expected a finite number",
-             m.joints[joints[i]].name.c_str(), i, num(values[i]).c_str());
-      q[joints[i]] = values[i];
-    }
+    check_joint_values(o, r, joints, values, nj);
+    for (int i = 0; i < nj; ++i) q[joints[i]] = values[i];
     static thread_local std::vector<int> path;
     for (int k = 0; k < nl; ++k) {
       int link = links[k];
