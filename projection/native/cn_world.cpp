@@ -34,6 +34,9 @@ World::World(const btVector3 &g) {
 }
 
 World::~World() {
+  // The bodies teleported since the last query are not brought up to date in the broadphase:
+  // that would find their new pairs only for the removals below to search them out again.
+  forget_stale_aabbs(*this);
   // Drop every overlapping pair at once, from the end of the pair array: removing the bodies
   // one by one below would otherwise search all pairs for each body's (quadratic in bodies).
   btOverlappingPairCache *pairs = broadphase->getOverlappingPairCache();
