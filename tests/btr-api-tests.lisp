@@ -143,6 +143,24 @@
                             (- (cl-transforms:z (second lo-hi)) (cl-transforms:z (first lo-hi))))))
              0.01)))))
 
+(test link-aabbs-are-the-links-boxes
+  (let ((w (small-world)))
+    (btr:add-object w :urdf :lifter '((2 0 0) (0 0 0 1)) :urdf *arm-urdf*)
+    (let* ((lifter (btr:object w :lifter))
+           (boxes (btr:link-aabbs lifter)))
+      (btr:set-robot-state-from-joints '(("lift" 0.2)) lifter)
+      (is (not (equalp boxes (btr:link-aabbs lifter))) "the hand's box moved with it")
+      (setf boxes (btr:link-aabbs lifter))
+      (is (= 12 (length boxes)))
+      (dotimes (i 2)
+        (multiple-value-bind (lo hi) (btr:aabb lifter i)
+          (is (equalp (vector (cl-transforms:x lo) (cl-transforms:y lo) (cl-transforms:z lo)
+                              (cl-transforms:x hi) (cl-transforms:y hi) (cl-transforms:z hi))
+                      (subseq boxes (* 6 i) (* 6 (1+ i)))))))
+      (signals btr:btr-error (btr:link-aabbs (btr:object w 'cup)))
+      (btr:remove-object w :lifter)
+      (signals error (btr:link-aabbs lifter)))))
+
 (test robot-attached-objects-in-collision
   (let* ((w (small-world))
          (arm (btr:add-object w :urdf 'arm '((2 0 0.05) (0 0 0 1)) :urdf *arm-urdf*))

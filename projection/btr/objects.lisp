@@ -189,6 +189,14 @@ an error naming OBJECT instead of its handle."
     (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
             (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
 
+(defun link-aabbs (object)
+  "The axis-aligned bounding box of every link of the articulated OBJECT, as AABB gives each,
+in one vector of doubles: min x y z, max x y z of link index 0, then of link 1, and so on."
+  (unless (typep object 'robot-object)
+    (btr-fail "LINK-AABBS: ~s is not an articulated object" object))
+  (with-live-object (object 'link-aabbs)
+    (native:robot-link-aabbs (whandle object) (object-handle object))))
+
 (defun local-aabb (object &optional link)
   "The box of OBJECT's shapes (or its LINK index's) in its own frame, as (values min-vector
 max-vector): the axis-aligned box an unturned copy of it standing at the origin would have."
