@@ -73,3 +73,29 @@
     (is (equal '((:costmap 3) (:costmap 4) (:costmap 5) (:costmap 6))
                (mapcar (lambda (o) (gethash "costmap" o)) (subseq overlays 3))))
     (is (equal '((0) (1) (2)) (mapcar (lambda (o) (gethash "samples" o)) (subseq overlays 0 3))))))
+
+(test deferred-designator-texts-are-the-designators-texts
+  ;; a location overlay keeps its designator's text for later: printed when asked for, it is
+  ;; what the designator printed at once would have been, in the package of that moment
+  (let* ((pose (cl-transforms-stamped:make-pose-stamped
+                "map" 0.0 (cl-transforms:make-3d-vector 1.5 -0.25 0.8)
+                (cl-transforms:make-quaternion 0 0 0.6 0.8)))
+         (designators
+           (list (desig:make-designator :location `((:pose ,pose)))
+                 (desig:make-designator :location `((:on ,(desig:make-designator
+                                                           :object '((:type :counter-top))))
+                                                    (:for ,(desig:make-designator
+                                                            :object '((:type :bottle) (:name bottle-1))))
+                                                    (:side (:left :right))))
+                 (desig::%make-designator :location '((:reachable-for :pr2)) :quantifier :all))))
+    (dolist (d designators)
+      (let ((deferred (let ((*package* (find-package :cl-user)))
+                        (cram-viewer::defer-designator-text d))))
+        (is (not (stringp deferred)) "nothing printed yet")
+        (let ((expected (let ((*package* (find-package :cl-user))) (cpl::designator-string d)))
+              (text (let ((*package* (find-package :keyword)) (*print-case* :downcase))
+                      (cram-viewer::overlay-designator-text deferred))))
+          (is (string= expected text) "~a~%is not~%~a" text expected)
+          (is (eq text (cram-viewer::overlay-designator-text deferred)) "printed once"))))
+    (is (string= "text" (cram-viewer::overlay-designator-text "text")))
+    (is (null (cram-viewer::overlay-designator-text nil)))))
