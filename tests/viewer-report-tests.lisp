@@ -99,3 +99,20 @@
           (is (eq text (cram-viewer::overlay-designator-text deferred)) "printed once"))))
     (is (string= "text" (cram-viewer::overlay-designator-text "text")))
     (is (null (cram-viewer::overlay-designator-text nil)))))
+
+(test viewer-url-follows-the-listening-socket
+  (unwind-protect
+       (let ((first (cram-viewer:viewer :port 0 :stream nil)))
+         (flet ((port-url ()
+                  (format nil "http://~a:~d/" (hunchentoot:acceptor-address cram-viewer::*acceptor*)
+                          (usocket:get-local-port
+                           (hunchentoot::acceptor-listen-socket cram-viewer::*acceptor*)))))
+           (is (string= (port-url) first))
+           (is (string= first (cram-viewer:viewer-url)))
+           (is (eq (cram-viewer:viewer-url) (cram-viewer:viewer-url)) "made once")
+           (cram-viewer:stop-viewer)
+           (is (null (cram-viewer:viewer-url)))
+           (let ((second (cram-viewer:viewer :port 0 :stream nil)))
+             (is (string= (port-url) second) "a new socket: its own port")
+             (is (string= second (cram-viewer:viewer-url))))))
+    (cram-viewer:stop-viewer)))
