@@ -116,3 +116,28 @@
              (is (string= (port-url) second) "a new socket: its own port")
              (is (string= second (cram-viewer:viewer-url))))))
     (cram-viewer:stop-viewer)))
+
+(defparameter *two-visual-urdf*
+  "<robot name=\"lamp\">
+     <material name=\"red\"><color rgba=\"1 0 0 1\"/></material>
+     <link name=\"base\"><visual><geometry><box size=\"0.2 0.2 0.1\"/></geometry></visual></link>
+     <link name=\"arm\">
+       <visual><geometry><box size=\"0.05 0.05 0.4\"/></geometry><material name=\"red\"/></visual>
+       <visual><origin xyz=\"0 0 0.2\"/><geometry><sphere radius=\"0.05\"/></geometry></visual></link>
+     <link name=\"bare\"/>
+     <joint name=\"tilt\" type=\"revolute\"><parent link=\"base\"/><child link=\"arm\"/>
+       <axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"1\"/></joint>
+     <joint name=\"fix\" type=\"fixed\"><parent link=\"arm\"/><child link=\"bare\"/></joint>
+   </robot>")
+
+(test link-colours-are-each-drawn-links-colour-once
+  (let ((w (make-instance 'btr:bt-reasoning-world)))
+    (btr:add-object w :urdf :lamp '((0 0 0) (0 0 0 1)) :urdf *two-visual-urdf*)
+    (let* ((lamp (btr:object w :lamp))
+           (d (cram-viewer::model-description lamp))
+           (colours (cram-viewer::link-colours lamp d))
+           (drawn (remove-duplicates (mapcar #'first (getf d :visuals)) :from-end t)))
+      (is (= 3 (length (getf d :visuals))) "two visuals of the arm, one of the base")
+      (is (= 2 (length colours)) "one colour per drawn link: ~s" colours)
+      (is (equal (mapcar (lambda (i) (btr:object-color lamp i)) drawn) colours)))
+    (btr:destroy-world w)))
