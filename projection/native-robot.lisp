@@ -19,6 +19,7 @@
 (defcn "cn_robot_get_joint" :int (w :int) (r :int) (j :int) (out :pointer))
 (defcn "cn_robot_link_poses" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_link_colors" :int (w :int) (r :int) (out :pointer) (cap :int))
+(defcn "cn_robot_link_aabbs" :int (w :int) (r :int) (out :pointer) (cap :int))
 (defcn "cn_robot_link_pose" :int (w :int) (r :int) (l :int) (out :pointer))
 (defcn "cn_robot_link_poses_if" :int (w :int) (r :int) (j :pointer) (v :pointer) (nj :int)
   (l :pointer) (nl :int) (out :pointer))
@@ -172,6 +173,15 @@ DVEC, 4 per link in index order."
          (v (make-dvec (* 4 n))))
     (declare (type dvec v))
     (with-vector-pointers ((p v)) (ccall "cn_robot_link_colors" world robot p n))
+    v))
+
+(defun robot-link-aabbs (world robot)
+  "The axis-aligned bounding box of every link of the articulated ROBOT (as OBJECT-AABB gives
+each), as one DVEC, 6 per link in index order: min x y z, max x y z."
+  (let* ((n (ccall "cn_robot_num_links" world robot))
+         (v (make-dvec (* 6 n))))
+    (declare (type dvec v))
+    (with-vector-pointers ((p v)) (ccall "cn_robot_link_aabbs" world robot p n))
     v))
 
 (defun robot-link-poses-if (world robot joints values links &optional out)

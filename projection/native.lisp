@@ -14,7 +14,7 @@
    #:world-body-count #:world-objects #:with-world
    ;; objects and bodies
    #:object-kind #:remove-object #:object-pose #:set-object-pose #:object-poses
-   #:set-object-poses #:object-color #:robot-link-colors #:set-object-color #:object-collision-filter
+   #:set-object-poses #:object-color #:robot-link-colors #:robot-link-aabbs #:set-object-color #:object-collision-filter
    #:set-object-collision-filter #:object-aabb #:object-local-aabb #:object-active-p
    #:add-plane #:add-box #:add-sphere #:add-cylinder #:add-cone #:add-mesh #:add-convex-hull
    #:body-velocity #:set-body-velocity #:body-mass #:body-shape

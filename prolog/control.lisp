@@ -174,8 +174,9 @@ names it in errors."
           (funcall (pred-entry pred) m (cdr goal) cont)))))
 
 (defvar *compiled-goals* (make-hash-table :test 'eq :weakness :key :synchronized t)
-  "Goal term → (goal-function nvars . env) for goals without pre-bound variables that were
-asked more than once (a query written as a constant), so that they are compiled once.")
+  "Goal term → (goal-function nvars env extra-vars) for goals that were asked more than once (a
+query written as a constant), with the same pre-bound variables EXTRA-VARS each time (NIL: none),
+so that they are compiled once.")
 
 (sb-ext:defglobal **last-compiled-goal** (cons nil nil)
   "(goal . entry) of the goal COMPILED-GOAL looked up last, so that repeating a query skips the
@@ -198,31 +199,37 @@ so that the table holds the goals asked repeatedly only.")
           for slot = (svref recent i)
           when (eq (car slot) goal) return (cdr slot))))
 
-(defun compiled-goal (goal)
-  "The goal function, frame and environment of the source GOAL: compiled once when the same goal
-object is asked repeatedly (a constant query), else compiled for this query."
-  (let ((entry (let ((last **last-compiled-goal**))
-                 (if (and (eq (car last) goal) goal)
-                     (cdr last)
-                     (let ((entry (or (gethash goal *compiled-goals*)
-                                      (let ((recent (and goal (recent-goal-entry goal))))
-                                        (when recent
-                                          (setf (gethash goal *compiled-goals*) recent))
-                                        recent))))
-                       (when entry
-                         (setf **last-compiled-goal** (cons goal entry)))
-                       entry)))))
-    (if entry
-        (destructuring-bind (fn nvars . env) entry
-          (let ((frame (make-array (the fixnum nvars))))
-            (loop for (sym . i) in env
-                  do (setf (svref frame i) (make-pvar sym)))
-            (values fn frame env)))
-        (multiple-value-bind (fn frame env) (compile-goal-term goal)
-          (when (consp goal)
-            (let ((i (logand (sb-ext:atomic-incf (car **recent-goal-next**)) 15)))
-              (setf (svref **recent-goals** i) (cons goal (list* fn (length frame) env)))))
-          (values fn frame env)))))
+(defun compiled-goal (goal &optional extra-vars)
+  "The goal function, frame and environment of the source GOAL, with variables also for the
+symbols EXTRA-VARS (the pre-bound variables of a query, see COMPILE-GOAL-TERM): compiled once
+when the same goal object is asked repeatedly with the same EXTRA-VARS (a constant query), else
+compiled for this query."
+  (flet ((fits (entry) (and entry (equal (fourth entry) extra-vars))))
+    (let ((entry (let ((last **last-compiled-goal**))
+                   (if (and (eq (car last) goal) goal (fits (cdr last)))
+                       (cdr last)
+                       (let ((entry (or (let ((kept (gethash goal *compiled-goals*)))
+                                          (and (fits kept) kept))
+                                        (let ((recent (and goal (recent-goal-entry goal))))
+                                          (when (fits recent)
+                                            (setf (gethash goal *compiled-goals*) recent)
+                                            recent)))))
+                         (when entry
+                           (setf **last-compiled-goal** (cons goal entry)))
+                         entry)))))
+      (if entry
+          (destructuring-bind (fn nvars env &rest more) entry
+            (declare (ignore more))
+            (let ((frame (make-array (the fixnum nvars))))
+              (loop for (sym . i) in env
+                    do (setf (svref frame i) (make-pvar sym)))
+              (values fn frame env)))
+          (multiple-value-bind (fn frame env) (compile-goal-term goal extra-vars)
+            (when (consp goal)
+              (let ((i (logand (sb-ext:atomic-incf (car **recent-goal-next**)) 15)))
+                (setf (svref **recent-goals** i)
+                      (cons goal (list fn (length frame) env (copy-list extra-vars))))))
+            (values fn frame env))))))
 
 (defun compile-goal-term (goal &optional extra-vars)
   "Compile the term GOAL (its ?symbols being variables) into a goal function; return it, a fresh

@@ -82,9 +82,8 @@ only the first is computed before PROLOG returns."
                                                  :from-end t)))))
     (multiple-value-bind (fn frame env)
         (with-storage-guard ()
-          (if bindings
-              (compile-goal-term goal (append binding-vars (term-vars (mapcar #'cdr bindings))))
-              (compiled-goal goal)))
+          (compiled-goal goal (and bindings
+                                   (append binding-vars (term-vars (mapcar #'cdr bindings))))))
       (let ((m (acquire-machine))
             (out (if out
                      (loop for sym in out collect (assoc sym env :test #'eq))

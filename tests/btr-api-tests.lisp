@@ -143,6 +143,48 @@
                             (- (cl-transforms:z (second lo-hi)) (cl-transforms:z (first lo-hi))))))
              0.01)))))
 
+(test link-aabbs-are-the-links-boxes
+  (let ((w (small-world)))
+    (btr:add-object w :urdf :lifter '((2 0 0) (0 0 0 1)) :urdf *arm-urdf*)
+    (let* ((lifter (btr:object w :lifter))
+           (boxes (btr:link-aabbs lifter)))
+      (btr:set-robot-state-from-joints '(("lift" 0.2)) lifter)
+      (is (not (equalp boxes (btr:link-aabbs lifter))) "the hand's box moved with it")
+      (setf boxes (btr:link-aabbs lifter))
+      (is (= 12 (length boxes)))
+      (dotimes (i 2)
+        (multiple-value-bind (lo hi) (btr:aabb lifter i)
+          (is (equalp (vector (cl-transforms:x lo) (cl-transforms:y lo) (cl-transforms:z lo)
+                              (cl-transforms:x hi) (cl-transforms:y hi) (cl-transforms:z hi))
+                      (subseq boxes (* 6 i) (* 6 (1+ i)))))))
+      (signals btr:btr-error (btr:link-aabbs (btr:object w 'cup)))
+      (btr:remove-object w :lifter)
+      (signals error (btr:link-aabbs lifter)))))
+
+(test bad-poses-are-named-after-the-object
+  (let* ((w (small-world)) (cup (btr:object w 'cup)))
+    (flet ((message (pose)
+             (handler-case (progn (setf (btr:pose cup) pose) nil)
+               (btr:btr-error (e) (princ-to-string e)))))
+      (let ((m (message '((1 2) (0 0 0 1)))))
+        (is (search "pose of " m) "~a" m)
+        (is (search (prin1-to-string 'cup) m) "~a" m))
+      (let ((m (message (cl-transforms:make-pose (cl-transforms:make-3d-vector 1d9 0 0)
+                                                 (cl-transforms:make-identity-rotation)))))
+        (is (search (format nil "pose of ~s" 'cup) m) "~a" m)
+        (is (search "BTR::*MAX-COORDINATE*" m) "~a" m)))
+    (is (equal "pose of CRAM-BULLET-REASONING::X"
+               (let ((*package* (find-package :cl-user)))
+                 (princ-to-string (btr::pose-of 'btr::x)))))))
+
+(test single-floats-become-their-printed-doubles
+  (is (eql 0.3d0 (btr::to-double 0.3)))
+  (is (eql 0.3d0 (btr::to-double 0.3)) "again, from the kept answer")
+  (is (eql -1.25d0 (btr::to-double -1.25)))
+  (is (eql 0.5d0 (btr::to-double 1/2)))
+  (is (eql 2d0 (btr::to-double 2)))
+  (is (eql 0.1d0 (btr::to-double 0.1f0))))
+
 (test robot-attached-objects-in-collision
   (let* ((w (small-world))
          (arm (btr:add-object w :urdf 'arm '((2 0 0.05) (0 0 0 1)) :urdf *arm-urdf*))

@@ -254,6 +254,22 @@ colour once set, else its visual's colour, else grey."
                                                   (* 4 (1+ (robot-link-index w r "base"))))))))
     (signals-naming ("rigid body") (robot-link-colors w (add-box w '(0 0 0 0 0 0 1) '(1 1 1))))))
 
+(test robot-link-aabbs-are-each-links-box
+  "ROBOT-LINK-AABBS gives, 6 per link, what OBJECT-AABB gives link by link: a link's body's box,
+or its origin for a link without a body."
+  (with-world (w)
+    (let ((r (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0.3 0.95))))
+      (set-robot-joints w r (list (robot-joint-index w r "j1")) '(0.4d0))
+      (let ((all (robot-link-aabbs w r)))
+        (is (= (* 6 (robot-link-count w r)) (length all)))
+        (dotimes (l (robot-link-count w r))
+          (is (equalp (object-aabb w r l) (subseq all (* 6 l) (* 6 (1+ l))))))
+        (let ((k (* 6 (robot-link-index w r "tool"))))
+          (is (equalp (subseq all k (+ k 3)) (subseq all (+ k 3) (+ k 6))) "a point: no body"))
+        (let ((k (* 6 (robot-link-index w r "base"))))
+          (is (< (aref all k) 1d0 (aref all (+ k 3))) "the base's box holds its origin"))))
+    (signals-naming ("rigid body") (robot-link-aabbs w (add-box w '(0 0 0 0 0 0 1) '(1 1 1))))))
+
 (test link-poses-if-are-the-poses-after-setting-the-joints
   "ROBOT-LINK-POSES-IF gives the poses the links would have with some joints set (a mimic
 joint following its leader), digit for digit the poses after setting them, and leaves the

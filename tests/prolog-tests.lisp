@@ -323,6 +323,28 @@
                           `((?gen . ,naturals)))))
     (is (equal '(3) (values-of '?x `(once (member ?x ?gen) (> ?x 2)) `((?gen . ,naturals)))))))
 
+(test goals-with-bindings-compiled-once-when-asked-again
+  "A constant goal asked repeatedly with initial bindings of the same variables is compiled once;
+each query's bindings give its own solutions; other pre-bound variables compile it again."
+  (let ((goal (list 'member '?x '?list))
+        (compiles 0))
+    (sb-int:encapsulate 'cram-prolog::compile-goal-term 'count
+                        (lambda (f &rest args) (incf compiles) (apply f args)))
+    (unwind-protect
+         (progn
+           (dotimes (i 20)
+             (is (equal (list i (1+ i))
+                        (mapcar (lambda (b) (cdr (assoc '?x b)))
+                                (force-ll (prolog goal `((?list . (,i ,(1+ i))))))))))
+           (is (<= compiles 2) "compiled ~d times for 20 queries" compiles)
+           (setf compiles 0)
+           (is (equal '(b) (mapcar (lambda (b) (cdr (assoc '?x b)))
+                                   (force-ll (prolog goal '((?list . (a b)) (?x . b)))))))
+           (is (= 1 compiles) "other pre-bound variables: compiled for them")
+           (is (null (force-ll (prolog goal '((?list . (a b)) (?x . c))))))
+           (is (equal '((?x . c) (?list . (c))) (first (force-ll (prolog goal '((?list . (c)))))))))
+      (sb-int:unencapsulate 'cram-prolog::compile-goal-term 'count))))
+
 (test goals-compiled-once-when-asked-again
   "A goal object asked repeatedly (a constant query) is compiled once and kept; goals built
 afresh for one query each are not kept; both give their solutions."

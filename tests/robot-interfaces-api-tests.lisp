@@ -50,3 +50,50 @@
     (let ((reference (desig:reference d)))
       (is (eq reference (desig:data d))))
     (signals error (desig:data 42))))
+
+(defvar *test-frame* nil "The frame the rule of FACT-ANSWERS-ARE-KEPT-WHILE-THE-FACTS-ARE-THE-SAME answers.")
+(defun test-frame () *test-frame*)
+
+(test fact-answers-are-kept-while-the-facts-are-the-same
+  "Queries over plain facts are answered from the kept solutions until the database changes;
+queries over rules (Lisp, special variables) run every time."
+  (unwind-protect
+       (progn
+         (eval '(prolog:def-fact-group fact-answers-test-robot (rob-int:arm rob-int:robot-odom-frame)
+                 (prolog:<- (rob-int:arm :fact-answers-bot :left))
+                 (prolog:<- (rob-int:arm :fact-answers-bot :right))
+                 (prolog:<- (rob-int:robot-odom-frame :fact-answers-bot "odom_a"))))
+         (let ((query '(rob-int:arm :fact-answers-bot ?arm)))
+           (is (rob-int::plain-facts-p 'rob-int:arm))
+           (is (equal '(:left :right) (rob-int::robot-arms :fact-answers-bot)))
+           (is (eq (rob-int::fact-solutions query) (rob-int::fact-solutions query))
+               "the same kept solutions")
+           (is (= 2 (length (rob-int::cached-fact-solutions query))))
+           (is (equal "odom_a" (rob-int::first-solution-value
+                                '?f '(rob-int:robot-odom-frame :fact-answers-bot ?f))))
+           ;; the facts change: the next answers are the new ones
+           (eval '(prolog:def-fact-group fact-answers-test-robot (rob-int:arm rob-int:robot-odom-frame)
+                   (prolog:<- (rob-int:arm :fact-answers-bot :left))
+                   (prolog:<- (rob-int:robot-odom-frame :fact-answers-bot "odom_b"))))
+           (is (equal '(:left) (rob-int::robot-arms :fact-answers-bot)))
+           (is (equal "odom_b" (rob-int::first-solution-value
+                                '?f '(rob-int:robot-odom-frame :fact-answers-bot ?f))))
+           (multiple-value-bind (value found)
+               (rob-int::first-solution-value '?f '(rob-int:robot-odom-frame :no-such-bot ?f))
+             (is (null value))
+             (is (null found)))))
+    (prolog:remove-fact-group 'fact-answers-test-robot))
+  ;; a predicate of rules: never kept, its answers follow the Lisp state
+  (unwind-protect
+       (progn
+         (eval '(prolog:def-fact-group fact-answers-rule-robot (rob-int:robot-base-frame)
+                 (prolog:<- (rob-int:robot-base-frame :fact-answers-bot ?frame)
+                   (prolog:lisp-fun cram-robot-interfaces-api-tests::test-frame ?frame))))
+         (is (not (rob-int::plain-facts-p 'rob-int:robot-base-frame)))
+         (let ((query '(rob-int:robot-base-frame :fact-answers-bot ?f)))
+           (is (null (nth-value 1 (rob-int::cached-fact-solutions query))))
+           (setf *test-frame* "base_a")
+           (is (equal "base_a" (rob-int::first-solution-value '?f query)))
+           (setf *test-frame* "base_b")
+           (is (equal "base_b" (rob-int::first-solution-value '?f query)))))
+    (prolog:remove-fact-group 'fact-answers-rule-robot)))

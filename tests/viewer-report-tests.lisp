@@ -73,3 +73,71 @@
     (is (equal '((:costmap 3) (:costmap 4) (:costmap 5) (:costmap 6))
                (mapcar (lambda (o) (gethash "costmap" o)) (subseq overlays 3))))
     (is (equal '((0) (1) (2)) (mapcar (lambda (o) (gethash "samples" o)) (subseq overlays 0 3))))))
+
+(test deferred-designator-texts-are-the-designators-texts
+  ;; a location overlay keeps its designator's text for later: printed when asked for, it is
+  ;; what the designator printed at once would have been, in the package of that moment
+  (let* ((pose (cl-transforms-stamped:make-pose-stamped
+                "map" 0.0 (cl-transforms:make-3d-vector 1.5 -0.25 0.8)
+                (cl-transforms:make-quaternion 0 0 0.6 0.8)))
+         (designators
+           (list (desig:make-designator :location `((:pose ,pose)))
+                 (desig:make-designator :location `((:on ,(desig:make-designator
+                                                           :object '((:type :counter-top))))
+                                                    (:for ,(desig:make-designator
+                                                            :object '((:type :bottle) (:name bottle-1))))
+                                                    (:side (:left :right))))
+                 (desig::%make-designator :location '((:reachable-for :pr2)) :quantifier :all))))
+    (dolist (d designators)
+      (let ((deferred (let ((*package* (find-package :cl-user)))
+                        (cram-viewer::defer-designator-text d))))
+        (is (not (stringp deferred)) "nothing printed yet")
+        (let ((expected (let ((*package* (find-package :cl-user))) (cpl::designator-string d)))
+              (text (let ((*package* (find-package :keyword)) (*print-case* :downcase))
+                      (cram-viewer::overlay-designator-text deferred))))
+          (is (string= expected text) "~a~%is not~%~a" text expected)
+          (is (eq text (cram-viewer::overlay-designator-text deferred)) "printed once"))))
+    (is (string= "text" (cram-viewer::overlay-designator-text "text")))
+    (is (null (cram-viewer::overlay-designator-text nil)))))
+
+(test viewer-url-follows-the-listening-socket
+  (unwind-protect
+       (let ((first (cram-viewer:viewer :port 0 :stream nil)))
+         (flet ((port-url ()
+                  (format nil "http://~a:~d/" (hunchentoot:acceptor-address cram-viewer::*acceptor*)
+                          (usocket:get-local-port
+                           (hunchentoot::acceptor-listen-socket cram-viewer::*acceptor*)))))
+           (is (string= (port-url) first))
+           (is (string= first (cram-viewer:viewer-url)))
+           (is (eq (cram-viewer:viewer-url) (cram-viewer:viewer-url)) "made once")
+           (cram-viewer:stop-viewer)
+           (is (null (cram-viewer:viewer-url)))
+           (let ((second (cram-viewer:viewer :port 0 :stream nil)))
+             (is (string= (port-url) second) "a new socket: its own port")
+             (is (string= second (cram-viewer:viewer-url))))))
+    (cram-viewer:stop-viewer)))
+
+(defparameter *two-visual-urdf*
+  "<robot name=\"lamp\">
+     <material name=\"red\"><color rgba=\"1 0 0 1\"/></material>
+     <link name=\"base\"><visual><geometry><box size=\"0.2 0.2 0.1\"/></geometry></visual></link>
+     <link name=\"arm\">
+       <visual><geometry><box size=\"0.05 0.05 0.4\"/></geometry><material name=\"red\"/></visual>
+       <visual><origin xyz=\"0 0 0.2\"/><geometry><sphere radius=\"0.05\"/></geometry></visual></link>
+     <link name=\"bare\"/>
+     <joint name=\"tilt\" type=\"revolute\"><parent link=\"base\"/><child link=\"arm\"/>
+       <axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"1\"/></joint>
+     <joint name=\"fix\" type=\"fixed\"><parent link=\"arm\"/><child link=\"bare\"/></joint>
+   </robot>")
+
+(test link-colours-are-each-drawn-links-colour-once
+  (let ((w (make-instance 'btr:bt-reasoning-world)))
+    (btr:add-object w :urdf :lamp '((0 0 0) (0 0 0 1)) :urdf *two-visual-urdf*)
+    (let* ((lamp (btr:object w :lamp))
+           (d (cram-viewer::model-description lamp))
+           (colours (cram-viewer::link-colours lamp d))
+           (drawn (remove-duplicates (mapcar #'first (getf d :visuals)) :from-end t)))
+      (is (= 3 (length (getf d :visuals))) "two visuals of the arm, one of the base")
+      (is (= 2 (length colours)) "one colour per drawn link: ~s" colours)
+      (is (equal (mapcar (lambda (i) (btr:object-color lamp i)) drawn) colours)))
+    (btr:destroy-world w)))

@@ -15,12 +15,20 @@ larger one is refused with an error naming it (Bullet loses all precision far be
 (defparameter *max-mass* 1d6
   "Largest mass (kg) of an object added to a world.")
 
+(defvar *single-float-doubles* (make-hash-table :test 'eql :synchronized t)
+  "Single float → the double TO-DOUBLE makes of it (plans give the same few constants again and
+again, and reading a printed float is slow).")
+
 (defun to-double (x)
   "The real X as a double float; a single float by its printed decimal (0.2 → 0.2d0)."
   (if (typep x 'single-float)
-      (let ((*read-default-float-format* 'double-float))
-        (values (read-from-string (let ((*read-default-float-format* 'single-float))
-                                    (prin1-to-string x)))))
+      (or (gethash x *single-float-doubles*)
+          (let ((d (let ((*read-default-float-format* 'double-float))
+                     (values (read-from-string (let ((*read-default-float-format* 'single-float))
+                                                 (prin1-to-string x)))))))
+            (when (> (hash-table-count *single-float-doubles*) 4096)
+              (clrhash *single-float-doubles*))
+            (setf (gethash x *single-float-doubles*) d)))
       (coerce x 'double-float)))
 
 (defun pose-in-fixed-frame (pose-stamped what)
@@ -162,8 +170,16 @@ an error naming OBJECT instead of its handle."
 (defgeneric (setf pose) (new-pose object)
   (:documentation "Teleport OBJECT to NEW-POSE; rigidly attached objects follow."))
 
+(defstruct (pose-of (:constructor pose-of (name)))
+  "What (SETF POSE)'s error messages call the pose they were given, \"pose of NAME\": written
+only when a message is made."
+  name)
+
+(defmethod print-object ((what pose-of) stream)
+  (format stream "pose of ~s" (pose-of-name what)))
+
 (defmethod (setf pose) (new-pose (o object))
-  (let ((v (pose->vector new-pose (format nil "pose of ~s" (name o)))))
+  (let ((v (pose->vector new-pose (pose-of (name o)))))
     (with-live-object (o '(setf pose)) (native:set-object-pose (whandle o) (object-handle o) v)))
   new-pose)
 
@@ -188,6 +204,14 @@ an error naming OBJECT instead of its handle."
              (native:object-aabb (whandle object) (object-handle object) (or link -1)))))
     (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
             (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
+
+(defun link-aabbs (object)
+  "The axis-aligned bounding box of every link of the articulated OBJECT, as AABB gives each,
+in one vector of doubles: min x y z, max x y z of link index 0, then of link 1, and so on."
+  (unless (typep object 'robot-object)
+    (btr-fail "LINK-AABBS: ~s is not an articulated object" object))
+  (with-live-object (object 'link-aabbs)
+    (native:robot-link-aabbs (whandle object) (object-handle object))))
 
 (defun local-aabb (object &optional link)
   "The box of OBJECT's shapes (or its LINK index's) in its own frame, as (values min-vector

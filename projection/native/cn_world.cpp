@@ -34,6 +34,9 @@ World::World(const btVector3 &g) {
 }
 
 World::~World() {
+  // The bodies teleported since the last query are not brought up to date in the broadphase:
+  // that would find their new pairs only for the removals below to search them out again.
+  forget_stale_aabbs(*this);
   // Drop every overlapping pair at once, from the end of the pair array: removing the bodies
   // one by one below would otherwise search all pairs for each body's (quadratic in bodies).
   btOverlappingPairCache *pairs = broadphase->getOverlappingPairCache();
@@ -678,6 +681,23 @@ int cn_object_aabb(int wh, int oh, int link, double *out) {
     out[0] = lo.x(); out[1] = lo.y(); out[2] = lo.z();
     out[3] = hi.x(); out[4] = hi.y(); out[5] = hi.z();
     return 0;
+  });
+}
+
+int cn_robot_link_aabbs(int wh, int r, double *out, int cap) {
+  return guard([&] {
+    Object &o = world(wh).robot(r);
+    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+    if (cap > 0) check_ptr(out, "AABB output");
+    int n = (int)o.link_rb.size();
+    for (int l = 0; l < n && l < cap; ++l) {  // as cn_object_aabb gives each link's
+      btVector3 lo, hi;
+      if (!union_aabb(o, l, lo, hi)) lo = hi = frame_pose(o, l).getOrigin();
+      double *b = out + 6 * l;
+      b[0] = lo.x(); b[1] = lo.y(); b[2] = lo.z();
+      b[3] = hi.x(); b[4] = hi.y(); b[5] = hi.z();
+    }
+    return n;
   });
 }
 

@@ -105,6 +105,8 @@ int cn_object_get_collision_filter(int world, int obj, int *out2);
 int cn_object_aabb(int world, int obj, int link, double *out6);  /* min xyz, max xyz    */
 int cn_object_local_aabb(int world, int obj, int link, double *out6); /* the same box in the
                                                  object's (or link's) own frame            */
+int cn_robot_link_aabbs(int world, int robot, double *out6, int cap); /* every link's box as
+                                   cn_object_aabb gives it, 6 per link -> num links          */
 int cn_object_is_active(int world, int obj);                 /* 1 if any body is awake     */
 
 /* ---- rigid bodies (mass 0 = static) -------------------------------------------------------- */

@@ -142,6 +142,10 @@ fixed joints are folded into the transforms. Errors name unknown links or a brok
 
 (defvar *chain-cache-lock* (sb-thread:make-mutex :name "ik chain cache"))
 
+(defvar *arm-ik-chains* '()
+  "ARM-IK-CHAIN's answers, entries (database-generation urdf robot-name arm . chain): each valid
+while the Prolog database is the same (the arm facts it read are plain facts).")
+
 (defun ik-chain (robot base-link tip-link)
   "The cached IK-CHAIN of ROBOT from BASE-LINK to TIP-LINK (one per URDF model and links)."
   (let ((key (list (btr:urdf robot) base-link tip-link)))
@@ -154,7 +158,8 @@ fixed joints are folded into the transforms. Errors name unknown links or a brok
   (sb-thread:with-recursive-lock (*chain-cache-lock*)
     (loop for c being the hash-values of *chain-cache*
           when (ik-chain-native c) do (ignore-errors (cram-native:destroy-chain (ik-chain-native c))))
-    (clrhash *chain-cache*)))
+    (clrhash *chain-cache*)
+    (setf *arm-ik-chains* '())))
 
 ;;; ---- forward kinematics -----------------------------------------------------------------------
 

@@ -15,6 +15,21 @@
 (defun arm-ik-chain (arm &optional (robot (robot-object)))
   "The IK chain of ARM: from the parent link of its first arm joint (the torso) to the child
 link of its last arm joint (the wrist)."
+  (let ((generation (prolog:database-generation))
+        (urdf (btr:urdf robot))
+        (name (robot-name)))
+    (or (loop for (g u n a . chain) in *arm-ik-chains*
+              when (and (eql g generation) (eq u urdf) (equal n name) (eq a arm))
+                return chain)
+        (let ((chain (find-arm-ik-chain arm robot)))
+          ;; the answer depends on the ARM and ARM-JOINTS facts and the URDF alone
+          (when (and (plain-facts-p 'rob-int:arm) (plain-facts-p 'rob-int:arm-joints))
+            (setf *arm-ik-chains*
+                  (cons (list* generation urdf name arm chain)
+                        (remove generation *arm-ik-chains* :key #'car :test-not #'eql))))
+          chain))))
+
+(defun find-arm-ik-chain (arm robot)
   (let* ((joints (cl-urdf:joints (btr:urdf robot)))
          (names (arm-joint-names arm))
          (first-joint (gethash (first names) joints))
@@ -26,19 +41,31 @@ link of its last arm joint (the wrist)."
 (defun arm-ik (arm ee-map-pose &key (robot (robot-object)) seed (max-restarts *ik-max-restarts*))
   "Joint values (ARM-JOINTS order) putting the end-effector link of ARM at EE-MAP-POSE (map)
 for the robot's current base pose and torso, or NIL. Quick distance check before solving."
-  (let* ((chain (arm-ik-chain arm robot))
-         (base-pose (btr:link-pose robot (ik-chain-base-link chain)))
-         (ee (end-effector-link arm))
+  (let ((chain (arm-ik-chain arm robot)))
+    (chain-ik-from-map chain (end-effector-link arm) (first-joint-child chain robot) ee-map-pose
+                       robot seed max-restarts)))
+
+(defun first-joint-child (chain robot)
+  "The child link of the first joint of CHAIN, a chain of ROBOT."
+  (let ((joint (svref (ik-chain-joint-names chain) 0)))
+    (cl-urdf:name (cl-urdf:child (or (gethash joint (cl-urdf:joints (btr:urdf robot)))
+                                     (projection-error "Joint ~s is not a joint of ~s." joint
+                                                       (btr:name robot)))))))
+
+(defun chain-ik-from-map (chain ee first-child ee-map-pose robot seed max-restarts)
+  "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
+the child link of the chain's first joint FIRST-CHILD."
+  (let* ((base-pose (btr:link-pose robot (ik-chain-base-link chain)))
          ;; the chain ends at the wrist; the end-effector link hangs below it
          (tip-in-ee (relative-transform (btr:link-pose robot ee) (btr:link-pose robot (ik-chain-tip-link chain))))
          (tip-goal (cl-transforms:transform* (cl-transforms:pose->transform ee-map-pose) tip-in-ee))
          (goal (cl-transforms:transform->pose
                 (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
                                           tip-goal)))
-         (first-joint-origin (nth-value 1 (joint-axis-and-origin robot (svref (ik-chain-joint-names chain) 0)))))
+         (first-joint-origin (cl-transforms:origin (btr:link-pose robot first-child))))
     (when (> (cl-transforms:v-dist first-joint-origin (cl-transforms:translation tip-goal))
              (+ (ik-chain-reach chain) 0.05d0))
-      (return-from arm-ik nil))
+      (return-from chain-ik-from-map nil))
     (solve-ik chain goal :seed (or seed (map 'list (lambda (j) (btr:joint-state robot j))
                                              (ik-chain-joint-names chain)))
                          :max-restarts max-restarts)))
@@ -127,7 +154,12 @@ is kept. Signals MANIPULATION-POSE-UNREACHABLE (state restored) when none does, 
 MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
   (let* ((robot (robot-object))
          (arms (mapcar #'car goals))
-         (ee-goals (mapcar (lambda (g) (cons (car g) (tcp->ee-pose (car g) (cdr g) robot))) goals))
+         ;; (arm ee-pose chain end-effector-link first-joint-child) per goal: what ARM-IK looks up
+         (ee-goals (mapcar (lambda (g)
+                             (let* ((arm (car g)) (chain (arm-ik-chain arm robot)))
+                               (list arm (tcp->ee-pose arm (cdr g) robot) chain
+                                     (end-effector-link arm) (first-joint-child chain robot))))
+                           goals))
          (base0 (btr:pose robot))
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
@@ -139,10 +171,10 @@ MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
         (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
         (dolist (torso-value torsos)
           (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
-          (let ((solutions (loop for (arm . pose) in ee-goals
-                                 for q = (arm-ik arm pose :robot robot :max-restarts 8)
+          (let ((solutions (loop for (nil pose chain ee first-child) in ee-goals
+                                 for q = (chain-ik-from-map chain ee first-child pose robot nil 8)
                                  unless q do (return nil)
-                                 collect (mapcar #'list (coerce (ik-chain-joint-names (arm-ik-chain arm robot)) 'list) q))))
+                                 collect (mapcar #'list (coerce (ik-chain-joint-names chain) 'list) q))))
             (when (and solutions (= (length solutions) (length ee-goals)))
               (btr:set-robot-state-from-joints (apply #'append solutions) robot)
               (if (and (perform-collision-check collision-mode arms robot)

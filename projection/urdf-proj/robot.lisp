@@ -24,38 +24,14 @@ everything, as on CRAM.")
   "The name of the current robot description."
   (rob-int:current-robot-name))
 
-(defvar *fact-answers* (make-hash-table :test 'equal :synchronized t)
-  "Query → (database generation . every solution, or :NOT-PLAIN) of the robot fact queries.")
-
 (defun plain-facts-p (functor)
-  "True when every clause of FUNCTOR is a fact without a body (or a default clause whose body is
-just FAIL, as the robot interfaces declare their functors): its answers depend on the database
-alone (no Lisp, no special variable, no world state)."
-  (let ((clauses (prolog:predicate-clauses functor)))
-    (and clauses
-         (every (lambda (c)
-                  (or (null (cdr c))
-                      (and (null (cddr c)) (consp (second c)) (null (cdr (second c)))
-                           (string= (symbol-name (car (second c))) "FAIL"))))
-                clauses)
-         (null (prolog::pred-handler (gethash functor prolog::*predicates*))))))
+  "True when every clause of FUNCTOR is a plain fact (see ROB-INT::PLAIN-FACTS-P)."
+  (rob-int::plain-facts-p functor))
 
 (defun cached-fact-solutions (query)
-  "Every solution of QUERY when it asks about plain facts (PLAIN-FACTS-P), kept until the
-database changes (the motions ask the same few questions about the robot many times); second
-value NIL for any other query, which the caller then runs itself."
-  (let ((generation (prolog:database-generation))
-        (cached (gethash query *fact-answers*)))
-    (cond ((and cached (eql (car cached) generation))
-           (if (eq (cdr cached) :not-plain) (values nil nil) (values (cdr cached) t)))
-          (t
-           (when (> (hash-table-count *fact-answers*) 1000) (clrhash *fact-answers*))
-           (if (and (consp query) (symbolp (car query)) (plain-facts-p (car query)))
-               (let ((solutions (cut:force-ll (prolog:prolog query))))
-                 (setf (gethash (copy-tree query) *fact-answers*) (cons generation solutions))
-                 (values solutions t))
-               (progn (setf (gethash (copy-tree query) *fact-answers*) (cons generation :not-plain))
-                      (values nil nil)))))))
+  "Every solution of QUERY over plain facts, kept while the database is the same; second value
+NIL for any other query (see ROB-INT::CACHED-FACT-SOLUTIONS)."
+  (rob-int::cached-fact-solutions query))
 
 (defun fact-value (variable query)
   "The value of VARIABLE in the first solution of the Prolog QUERY, or NIL; second value: found."
@@ -118,7 +94,7 @@ TCP-IN-EE-POSE fact, else the current relative pose of the tool frame link, else
 (defun torso-joint ()
   "The torso joint name of the current robot and its link, or NIL when it has none."
   (multiple-value-bind (bindings)
-      (cut:lazy-car (prolog:prolog `(rob-int:robot-torso-link-joint ,(robot-name) ?link ?joint)))
+      (cut:lazy-car (rob-int::fact-solutions `(rob-int:robot-torso-link-joint ,(robot-name) ?link ?joint)))
     (values (and bindings (cut:var-value '?joint bindings))
             (and bindings (cut:var-value '?link bindings)))))
 
@@ -128,7 +104,7 @@ TCP-IN-EE-POSE fact, else the current relative pose of the tool frame link, else
 
 (defun neck-joints ()
   "The neck joints of the current robot, base first."
-  (let ((bindings (cut:lazy-car (prolog:prolog `(rob-int:robot-neck-joints ,(robot-name) . ?joints)))))
+  (let ((bindings (cut:lazy-car (rob-int::fact-solutions `(rob-int:robot-neck-joints ,(robot-name) . ?joints)))))
     (and bindings (cut:var-value '?joints bindings))))
 
 (defun camera-frame (&optional (robot (robot-object)))

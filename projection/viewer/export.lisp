@@ -36,7 +36,7 @@ are listed oldest first and the last one validated is the chosen pose."
   (if (equal (gethash "type" overlay) "location")
       (let ((samples (sb-thread:with-mutex (*recorder-lock*) (copy-list (gethash "samples" overlay))))
             (costmap (gethash "costmap" overlay)))
-        (obj "type" "location" "designator" (gethash "designator" overlay)
+        (obj "type" "location" "designator" (overlay-designator-text (gethash "designator" overlay))
              "heat" (and costmap (heat-map-json costmap))
              "samples" (reverse samples) "chosen" (first samples)))
       overlay))

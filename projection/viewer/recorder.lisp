@@ -220,6 +220,45 @@ heap.")
     (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
           (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q))))
 
+(defparameter *deferred-print-variables*
+  '(*package* *print-pretty* *print-case* *print-base* *print-radix* *print-readably*
+    *print-circle* *print-lines* *print-right-margin* *print-miser-width* *read-default-float-format*)
+  "The printer variables a deferred designator text is printed with as they were when it was
+deferred.")
+
+(defstruct (deferred-designator
+            (:constructor %defer-designator (quantifier type-name description class bindings)))
+  "What a location overlay shows of its designator: its quantifier, type and description (they
+do not change) and the printer variables of the moment, printed only when the overlay is sent
+\(OVERLAY-DESIGNATOR-TEXT). Not the designator itself, which would keep its costmap alive."
+  quantifier type-name description class bindings (text nil))
+
+(defmethod print-object ((d deferred-designator) stream)
+  (if *print-readably*
+      (error 'print-not-readable :object d)
+      (desig::write-designator (deferred-designator-quantifier d) (deferred-designator-type-name d)
+                               (deferred-designator-description d) stream))
+  d)
+
+(defun defer-designator-text (designator)
+  "A DEFERRED-DESIGNATOR of DESIGNATOR: OVERLAY-DESIGNATOR-TEXT prints it later as
+CPL::DESIGNATOR-STRING prints DESIGNATOR now."
+  (%defer-designator (desig:quantifier designator) (desig::designator-type-name designator)
+                     (desig:description designator) (type-of designator)
+                     (mapcar #'symbol-value *deferred-print-variables*)))
+
+(defun overlay-designator-text (value)
+  "The designator text of a location overlay: VALUE itself (a string or NIL), or the text of a
+DEFERRED-DESIGNATOR, printed the first time it is asked for."
+  (if (deferred-designator-p value)
+      (or (deferred-designator-text value)
+          (setf (deferred-designator-text value)
+                (progv *deferred-print-variables* (deferred-designator-bindings value)
+                  (handler-case (let ((*print-length* 20) (*print-level* 6))
+                                  (prin1-to-string value))
+                    (error () (format nil "<unprintable ~s>" (deferred-designator-class value)))))))
+      value))
+
 (defun location-sample-observer (designator solution)
   "Location validator that only watches: every candidate pose of a location designator with a
 costmap is kept (with the costmap) for the replay's overlays. Always :UNKNOWN."
@@ -228,7 +267,7 @@ costmap is kept (with the costmap) for the replay's overlays. Always :UNKNOWN."
     (let ((overlay (gethash designator *noted-costmaps*)))
       (unless overlay
         (let ((costmap (gethash designator costmap::*designator-costmaps*)))
-          (setf overlay (obj "type" "location" "designator" (cpl::designator-string designator)
+          (setf overlay (obj "type" "location" "designator" (defer-designator-text designator)
                              "costmap" (and (typep costmap 'costmap:location-costmap) costmap)
                              "samples" '()))
           (setf (gethash designator *noted-costmaps*) overlay)

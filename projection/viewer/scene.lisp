@@ -234,10 +234,11 @@ URDF, link colours and camera shares it.")
 
 (defun link-colours (robot description)
   "The colour of every link of ROBOT that has a visual in DESCRIPTION, in order."
-  (let ((colours (btr:link-colors robot)) (seen (make-hash-table)))
+  (let* ((colours (btr:link-colors robot))
+         (seen (make-array (length colours) :element-type 'bit :initial-element 0)))
     (loop for (i) in (getf description :visuals)
-          unless (gethash i seen)
-            do (setf (gethash i seen) t)
+          when (zerop (sbit seen i))
+            do (setf (sbit seen i) 1)
             and collect (svref colours i))))
 
 (defun object-descriptor (object)

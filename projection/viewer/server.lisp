@@ -217,11 +217,21 @@ and joints changed), `overlays' and `runs' events, until the page goes away."
 
 (defun viewer-running-p () "True when the viewer serves." (and *acceptor* (hunchentoot:started-p *acceptor*) t))
 
+(defvar *viewer-url* (cons nil nil)
+  "(listening socket . URL): the URL of the viewer last asked for, made once per socket (every
+run's debug window prints it).")
+
 (defun viewer-url ()
   "The URL of the running viewer, or NIL."
   (when (viewer-running-p)
-    (format nil "http://~a:~d/" (hunchentoot:acceptor-address *acceptor*)
-            (usocket:get-local-port (hunchentoot::acceptor-listen-socket *acceptor*)))))
+    (let ((socket (hunchentoot::acceptor-listen-socket *acceptor*))
+          (cached *viewer-url*))
+      (if (and socket (eq (car cached) socket))
+          (cdr cached)
+          (let ((url (format nil "http://~a:~d/" (hunchentoot:acceptor-address *acceptor*)
+                             (usocket:get-local-port socket))))
+            (setf *viewer-url* (cons socket url))
+            url)))))
 
 (defun stop-viewer ()
   "Stop the viewer (open pages lose their connection)."

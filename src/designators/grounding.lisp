@@ -179,12 +179,23 @@ DESIGNATOR's chain. Returns it."
 
 ;;; Actions and motions
 
+(defvar *grounding-goals* '()
+  "(predicate . goal): the goal (PREDICATE ?DESIGNATOR ?GROUNDING) PROLOG-SOLUTIONS asks with
+?DESIGNATOR bound, one object per predicate, so that Prolog compiles it once.")
+
+(defun grounding-goal (predicate)
+  "The goal (PREDICATE ?DESIGNATOR ?GROUNDING), the same object for the same PREDICATE."
+  (or (cdr (assoc predicate *grounding-goals* :test #'eq))
+      (let ((goal (list predicate '?designator '?grounding)))
+        (setf *grounding-goals* (acons predicate goal *grounding-goals*))
+        goal)))
+
 (defun prolog-solutions (designator predicate check)
   (lazy-mapcar (lambda (bindings)
                  (let ((value (var-value '?grounding bindings)))
                    (funcall check value)
                    value))
-               (prolog `(,predicate ,designator ?grounding))))
+               (prolog (grounding-goal predicate) `((?designator . ,designator)))))
 
 (defmethod compute-solutions ((designator action-designator))
   (prolog-solutions designator 'action-grounding

@@ -349,19 +349,28 @@ inside a list value keep their colons: (TYPE BOTTLE), (ARM (:LEFT :RIGHT)), (POS
           (write-char #\) stream))
         (bare entry))))
 
+(defun designator-type-name (designator)
+  "The name PRINT-OBJECT shows for DESIGNATOR's type: its type keyword's, else its class's."
+  (handler-case (symbol-name (designator-type designator))
+    (error () (symbol-name (class-name (class-of designator))))))
+
+(defun write-designator (quantifier type-name description stream)
+  "Write to STREAM what PRINT-OBJECT writes for a designator of QUANTIFIER, TYPE-NAME (see
+DESIGNATOR-TYPE-NAME) and DESCRIPTION."
+  (let ((indent (* 4 (1+ *print-depth*))))
+    (format stream "#<~a ~a" (if (eq quantifier :all) "ALL" "A") type-name)
+    (let ((*print-depth* (1+ *print-depth*)))
+      (if (listp description)
+          (dolist (entry description)
+            (terpri stream)
+            (loop repeat indent do (write-char #\Space stream))
+            (write-property-value entry stream))
+          (format stream " ~s" description)))
+    (write-char #\> stream)))
+
 (defmethod print-object ((designator designator) stream)
   (if *print-readably*
       (error 'print-not-readable :object designator)
-      (let ((indent (* 4 (1+ *print-depth*))))
-        (format stream "#<~a ~a" (if (eq (quantifier designator) :all) "ALL" "A")
-                (handler-case (symbol-name (designator-type designator))
-                  (error () (symbol-name (class-name (class-of designator))))))
-        (let ((*print-depth* (1+ *print-depth*)))
-          (if (listp (description designator))
-              (dolist (entry (description designator))
-                (terpri stream)
-                (loop repeat indent do (write-char #\Space stream))
-                (write-property-value entry stream))
-              (format stream " ~s" (description designator))))
-        (write-char #\> stream)))
+      (write-designator (quantifier designator) (designator-type-name designator)
+                        (description designator) stream))
   designator)

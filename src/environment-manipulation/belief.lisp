@@ -77,13 +77,16 @@ was attached to."
         (when links (btr:detach-object environment object))
         links))))
 
-(defun boxes-overlap-p (lo-a hi-a lo-b hi-b margin)
-  (and (<= (- (cl-transforms:x lo-a) margin) (cl-transforms:x hi-b))
-       (<= (- (cl-transforms:x lo-b) margin) (cl-transforms:x hi-a))
-       (<= (- (cl-transforms:y lo-a) margin) (cl-transforms:y hi-b))
-       (<= (- (cl-transforms:y lo-b) margin) (cl-transforms:y hi-a))
-       (<= (- (cl-transforms:z lo-a) margin) (cl-transforms:z hi-b))
-       (<= (- (cl-transforms:z lo-b) margin) (cl-transforms:z hi-a))))
+(defun box-overlaps-link-p (lo hi boxes i margin)
+  "True when the box LO HI (3D vectors) and the box of link I in BOXES (BTR:LINK-AABBS) are at
+most MARGIN apart along every axis."
+  (let ((k (* 6 i)))
+    (and (<= (- (cl-transforms:x lo) margin) (aref boxes (+ k 3)))
+         (<= (- (aref boxes k) margin) (cl-transforms:x hi))
+         (<= (- (cl-transforms:y lo) margin) (aref boxes (+ k 4)))
+         (<= (- (aref boxes (+ k 1)) margin) (cl-transforms:y hi))
+         (<= (- (cl-transforms:z lo) margin) (aref boxes (+ k 5)))
+         (<= (- (aref boxes (+ k 2)) margin) (cl-transforms:z hi)))))
 
 (defun touched-environment-links (object environment)
   "The links of ENVIRONMENT within *RESTING-CONTACT-DISTANCE* of OBJECT, in link order: links
@@ -91,11 +94,11 @@ whose bounding box is that close are measured with the shim's closest distance."
   (let ((world (btr:world-handle (btr:world object)))
         (margin *resting-contact-distance*))
     (multiple-value-bind (lo hi) (btr:aabb object)
-      (loop for link in (btr:link-names environment)
+      (loop with boxes = (btr:link-aabbs environment)
+            for link in (btr:link-names environment)
             for i from 0
             when (and (cram-native:robot-link-has-body-p world (btr:object-handle environment) i)
-                      (multiple-value-bind (link-lo link-hi) (btr:aabb environment i)
-                        (boxes-overlap-p lo hi link-lo link-hi margin))
+                      (box-overlaps-link-p lo hi boxes i margin)
                       (<= (cram-native:closest-distance world (btr:object-handle object)
                                                         (btr:object-handle environment)
                                                         :link-b i :max-distance (* 2 margin))

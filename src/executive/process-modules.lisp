@@ -209,8 +209,9 @@ debugger with that hook, at the signalling frame."
   "The names of the running process modules whose MATCHING-PROCESS-MODULE rules accept
 DESIGNATOR, in rule order without duplicates."
   (let ((names '()))
-    (cut:lazy-dolist (bindings (prolog:prolog `(and (matching-process-module ,designator ?pm)
-                                                    (available-process-module ?pm))))
+    (cut:lazy-dolist (bindings (prolog:prolog '(and (matching-process-module ?designator ?pm)
+                                                    (available-process-module ?pm))
+                                              `((?designator . ,designator))))
       (pushnew (cut:var-value '?pm bindings) names))
     (nreverse names)))
 

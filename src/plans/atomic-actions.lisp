@@ -144,16 +144,14 @@ the object is there, else from the designator's data."
           (pose-in-map pose)))))
 
 (defun check-arm (arm)
-  (let ((arms (mapcar (lambda (b) (cut:var-value '?arm b))
-                      (cut:force-ll (prolog `(rob-int:arm ,(current-robot-name) ?arm))))))
+  (let ((arms (rob-int::robot-arms (current-robot-name))))
     (unless (member arm arms)
       (pp-error "Unknown arm ~s: the robot ~s has the arms ~{~s~^, ~}." arm
                 (current-robot-name) arms))
     arm))
 
 (defun robot-arms ()
-  (mapcar (lambda (b) (cut:var-value '?arm b))
-          (cut:force-ll (prolog `(rob-int:arm ,(current-robot-name) ?arm)))))
+  (rob-int::robot-arms (current-robot-name)))
 
 (defun arm-list (arms)
   (mapcar #'check-arm (if (listp arms) arms (list arms))))

@@ -44,19 +44,21 @@
   "The highest top (z) of an environment link or item below height Z whose bounding box covers
 (X, Y), or NIL."
   (let ((best nil))
-    (flet ((consider (lo hi)
-             (when (and (<= (cl-transforms:x lo) x (cl-transforms:x hi))
-                        (<= (cl-transforms:y lo) y (cl-transforms:y hi))
-                        (<= (cl-transforms:z hi) (+ z 1d-3)))
-               (setf best (max (or best most-negative-double-float) (cl-transforms:z hi))))))
-      (let ((env (btr:get-environment-object)))
-        (when env
+    (flet ((consider (x0 y0 x1 y1 top)
+             (when (and (<= x0 x x1) (<= y0 y y1) (<= top (+ z 1d-3)))
+               (setf best (max (or best most-negative-double-float) top)))))
+      (let* ((env (btr:get-environment-object))
+             (boxes (and env (ignore-errors (btr:link-aabbs env)))))
+        (when boxes
           (dotimes (i (length (btr:link-names env)))
-            (multiple-value-bind (lo hi) (ignore-errors (btr:aabb env i))
-              (when lo (consider lo hi))))))
+            (let ((k (* 6 i)))
+              (consider (aref boxes k) (aref boxes (+ k 1))
+                        (aref boxes (+ k 3)) (aref boxes (+ k 4)) (aref boxes (+ k 5)))))))
       (dolist (o (btr:objects))
         (when (and (typep o 'btr:item) (not (member (btr:name o) ignore)))
-          (multiple-value-bind (lo hi) (btr:aabb o) (consider lo hi)))))
+          (multiple-value-bind (lo hi) (btr:aabb o)
+            (consider (cl-transforms:x lo) (cl-transforms:y lo)
+                      (cl-transforms:x hi) (cl-transforms:y hi) (cl-transforms:z hi))))))
     best))
 
 ;;; ---- picking up --------------------------------------------------------------------------------

@@ -135,9 +135,55 @@ the convention of URDF-NAME->ROBOT-NAME)."
 
 ;;; Facts as Lisp values
 
+;;; Answers of queries over plain facts, kept while the database is the same
+
+(defvar *fact-answers* (make-hash-table :test 'equal :synchronized t)
+  "Query → (database generation . every solution, or :NOT-PLAIN) of the fact queries asked
+through CACHED-FACT-SOLUTIONS.")
+
+(defparameter *fact-answers-size* 1000
+  "The most queries *FACT-ANSWERS* keeps (it is emptied when it holds more).")
+
+(defun plain-facts-p (functor)
+  "True when every clause of FUNCTOR is a fact without a body (or a default clause whose body is
+just FAIL, as the robot interfaces declare their functors): its answers depend on the database
+alone (no Lisp, no special variable, no world state)."
+  (let ((clauses (prolog:predicate-clauses functor)))
+    (and clauses
+         (every (lambda (c)
+                  (or (null (cdr c))
+                      (and (null (cddr c)) (consp (second c)) (null (cdr (second c)))
+                           (string= (symbol-name (car (second c))) "FAIL"))))
+                clauses)
+         (null (prolog::pred-handler (gethash functor prolog::*predicates*))))))
+
+(defun cached-fact-solutions (query)
+  "Every solution of QUERY when it asks about plain facts (PLAIN-FACTS-P), kept until the
+database changes (plans and motions ask the same few questions about the robot many times);
+second value NIL for any other query, which the caller then runs itself."
+  (let ((generation (prolog:database-generation))
+        (cached (gethash query *fact-answers*)))
+    (cond ((and cached (eql (car cached) generation))
+           (if (eq (cdr cached) :not-plain) (values nil nil) (values (cdr cached) t)))
+          (t
+           (when (> (hash-table-count *fact-answers*) *fact-answers-size*)
+             (clrhash *fact-answers*))
+           (if (and (consp query) (symbolp (car query)) (plain-facts-p (car query)))
+               (let ((solutions (cut:force-ll (prolog query))))
+                 (setf (gethash (copy-tree query) *fact-answers*) (cons generation solutions))
+                 (values solutions t))
+               (progn (setf (gethash (copy-tree query) *fact-answers*) (cons generation :not-plain))
+                      (values nil nil)))))))
+
+(defun fact-solutions (query)
+  "The solutions of QUERY: kept ones for a query over plain facts (CACHED-FACT-SOLUTIONS), else
+those of PROLOG (a lazy list)."
+  (multiple-value-bind (solutions cached) (cached-fact-solutions query)
+    (if cached solutions (prolog query))))
+
 (defun first-solution-value (variable query)
   "The value of VARIABLE in the first solution of QUERY, and whether there was one."
-  (let ((solutions (prolog query)))
+  (let ((solutions (fact-solutions query)))
     (if solutions
         (values (cut:var-value variable (cut:lazy-car solutions)) t)
         (values nil nil))))
@@ -145,7 +191,7 @@ the convention of URDF-NAME->ROBOT-NAME)."
 (defun robot-arms (robot)
   "The arms ROBOT has according to the ARM facts."
   (mapcar (lambda (bindings) (cut:var-value '?arm bindings))
-          (cut:force-ll (prolog `(arm ,robot ?arm)))))
+          (cut:force-ll (fact-solutions `(arm ,robot ?arm)))))
 
 (defun arm-fact-value (predicate robot arm)
   "The value of the (PREDICATE ROBOT ARM ?value) fact; ROBOT-INTERFACE-ERROR naming PREDICATE,
