@@ -442,4 +442,21 @@ int cn_attachments(int wh, int *out4, int cap) {
   });
 }
 
+int cn_robot_link_aabbs(int wh, int r, double *out, int cap) {
+  return guard([&] {
+    Object &o = world(wh).robot(r);
+    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+    if (cap > 0) check_ptr(out, "AABB output");
+    int n = (int)o.link_rb.size();
+    for (int l = 0; l < n && l < cap; ++l) {  // as cn_object_aabb gives each link's
+      btVector3 lo, hi;
+      if (!union_aabb(o, l, lo, hi)) lo = hi = frame_pose(o, l).getOrigin();
+      double *b = out + 6 * l;
+      b[0] = lo.x(); b[1] = lo.y(); b[2] = lo.z();
+      b[3] = hi.x(); b[4] = hi.y(); b[5] = hi.z();
+    }
+    return n;
+  });
+}
+
 }  // extern "C"
