@@ -7,12 +7,7 @@
 
 (defun chain-lookups (thunk)
   "Call THUNK; return how often the arm facts were consulted for an IK chain meanwhile."
-  (let ((lookups 0))
-    (sb-int:encapsulate 'urdf-proj::find-arm-ik-chain 'count
-                        (lambda (f &rest args) (incf lookups) (apply f args)))
-    (unwind-protect (funcall thunk)
-      (sb-int:unencapsulate 'urdf-proj::find-arm-ik-chain 'count))
-    lookups))
+  (values (calls-during 'urdf-proj::find-arm-ik-chain thunk)))
 
 (test arm-ik-chains-are-kept-while-the-facts-are-the-same
   (with-kitchen
