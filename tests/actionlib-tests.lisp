@@ -15,30 +15,40 @@
 (defun checkout-file (name)
   (namestring (merge-pathnames name (asdf:system-source-directory "cram-plans/tests/base"))))
 
-(defmacro with-setup-backtrace (&body body)
-  "Run BODY; an error in it becomes an error that shows where it came from (the setup of a
-private master and nodes depends on the machine)."
-  `(handler-bind ((error (lambda (e)
-                           (error "Setting up the gripper's server failed: ~a~%~{  ~s~%~}"
-                                  e (sb-debug:list-backtrace :count 12)))))
-     ,@body))
+(defun setup-failure (e)
+  "An error for a failed setup: the backtrace first and the cause last, so that the cause is in
+what a log's tail shows."
+  (error "Setting up the gripper's server failed.~%~{  ~s~%~}Cause: ~a"
+         (sb-debug:list-backtrace :count 12) e))
+
+(defun start-gripper-server ()
+  "A private master, the gripper's action server and a node of this process (a node left running
+by an earlier test is stopped first: it talks to another master)."
+  (roslisp-utilities:shutdown-ros)
+  (cram-ros-pms::start-private-ros)
+  (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
+                             (checkout-file "tools/ros/gripper_action_server.py"))
+  (roslisp:start-ros-node "actionlib_test" :anonymous t))
+
+(defun stop-gripper-server ()
+  (actionlib-client:destroy-simple-action-clients)
+  (ignore-errors (roslisp-utilities:shutdown-ros))
+  (cram-ros-pms::stop-private-ros))
 
 (defun call-with-gripper-server (thunk)
-  "A private master, the gripper's action server and a node of this process around THUNK (a
-node left running by an earlier test is stopped first: it talks to another master)."
-  (with-setup-backtrace
-    (roslisp-utilities:shutdown-ros)
-    (cram-ros-pms::start-private-ros))
+  "THUNK with the gripper's server up. The setup depends on the machine (free ports, a loaded
+CPU): a failed first try is reported on *ERROR-OUTPUT* and made once more from scratch."
   (unwind-protect
        (progn
-         (with-setup-backtrace
-           (cram-ros-pms::start-group cram-ros-pms::*private-ros* "my_gripper" "/usr/bin/python3"
-                                      (checkout-file "tools/ros/gripper_action_server.py"))
-           (roslisp:start-ros-node "actionlib_test" :anonymous t))
+         (handler-case (start-gripper-server)
+           (error (e)
+             (format *error-output* "~&;; gripper server setup failed, trying once more: ~a~%" e)
+             (ignore-errors (stop-gripper-server))
+             (sleep 1)
+             (handler-bind ((error #'setup-failure))
+               (start-gripper-server))))
          (funcall thunk))
-    (actionlib-client:destroy-simple-action-clients)
-    (ignore-errors (roslisp-utilities:shutdown-ros))
-    (cram-ros-pms::stop-private-ros)))
+    (stop-gripper-server)))
 
 (defun goal (client mm)
   (actionlib:make-action-goal client goal mm))
