@@ -535,7 +535,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "urdf-proj-tests")
                (:file "urdf-proj-ik-fallback-tests")
-               (:file "urdf-proj-arm-ik-tests")))
+               (:file "urdf-proj-arm-ik-tests")
+               (:file "urdf-proj-collision-check-tests")))
 
 (defsystem "cram-plans/tests/costmap"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-location-costmap" "cram-plans/cram-pr2-description")

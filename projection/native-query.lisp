@@ -7,6 +7,8 @@
   (cap :int))
 (defcn "cn_object_contacts_except" :int (w :int) (o :int) (th :double) (ex :pointer) (n :int)
   (o4 :pointer) (d :pointer) (cap :int))
+(defcn "cn_object_first_contact" :int (w :int) (o :int) (th :double) (ex :pointer) (n :int)
+  (skip :pointer) (nskip :int) (allowed :pointer) (nallowed :int) (o4 :pointer))
 (defcn "cn_closest_distance" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (maxd :double)
   (out :pointer))
 (defcn "cn_ignore_pair" :int (w :int) (a :int) (la :int) (b :int) (lb :int) (ignore :int))
@@ -64,6 +66,34 @@ link other other-link distance)."
                                      pi4 pd cap)))))
         (%collect-pairs (lambda (pi4 pd cap)
                           (ccall "cn_object_contacts" world object th pi4 pd cap))))))
+
+(defun int-vector (values what)
+  "VALUES (a list of integers) as a vector of 32-bit integers; WHAT names them in an error."
+  (let ((v (make-array (length values) :element-type '(signed-byte 32))))
+    (loop for x in values for i from 0 do (setf (aref v i) (int-arg x 'object-first-contact what)))
+    v))
+
+(defun object-first-contact (world object &key (threshold 0d0) except skip-links allowed)
+  "The first contact of the articulated OBJECT's links with another object (or of two of its
+links, when its self-collision is on) that is not left out, as (object link other other-link),
+or NIL when there is none: a yes/no collision check that stops at the first contact. Left out:
+the objects of EXCEPT (handles), the links of OBJECT in SKIP-LINKS (indices) and the contacts
+ALLOWED covers, a list of (link other other-link) with :ANY for any."
+  (let ((th (real-arg threshold 'object-first-contact "threshold"))
+        (ex (int-vector except "object to leave out"))
+        (skip (int-vector skip-links "link to leave out"))
+        (al (int-vector (loop for triple in allowed
+                              append (mapcar (lambda (x) (if (eq x :any) -2 x)) triple))
+                        "allowed contact"))
+        (out (make-array 4 :element-type '(signed-byte 32))))
+    (declare (dynamic-extent out))
+    (unless (every (lambda (triple) (and (listp triple) (= 3 (length triple)))) allowed)
+      (error "OBJECT-FIRST-CONTACT: allowed contacts ~s: expected a list of (link other other-link)."
+             allowed))
+    (when (= 1 (with-vector-pointers ((pex ex) (pskip skip) (pal al) (pout out))
+                 (ccall "cn_object_first_contact" world object th pex (length ex)
+                        pskip (length skip) pal (floor (length al) 3) pout)))
+      (coerce out 'list))))
 
 (defun closest-distance (world object-a object-b &key (link-a -1) (link-b -1) (max-distance 1d0))
   "Closest distance between OBJECT-A and OBJECT-B (or the given links), searched up to

@@ -107,45 +107,117 @@ struct PairDistance : btCollisionWorld::ContactResultCallback {
   }
 };
 
+// The objects whose boxes overlap the union of the boxes of the articulated object O's links,
+// O itself and the objects of EXCEPT left out.
+static std::vector<btBroadphaseProxy *> &articulated_neighbours(World &w, const Object &o,
+                                                               const int *except, int n_except) {
+  struct Others : btBroadphaseAabbCallback {
+    int self;
+    const int *except;
+    int n_except;
+    std::vector<btBroadphaseProxy *> *found;
+    bool process(const btBroadphaseProxy *p) override {
+      auto *co = static_cast<const btCollisionObject *>(p->m_clientObject);
+      int ob = co->getUserIndex();
+      if (ob != self && !excepted(ob, except, n_except))
+        found->push_back(const_cast<btBroadphaseProxy *>(p));
+      return true;
+    }
+  } others;
+  static std::vector<btBroadphaseProxy *> found;  // reused: queries run one at a time
+  found.clear();
+  btVector3 lo, hi;
+  if (!union_aabb(o, -1, lo, hi)) return found;
+  others.self = o.id;
+  others.except = except;
+  others.n_except = n_except;
+  others.found = &found;
+  w.dw->getBroadphase()->aabbTest(lo, hi, others);
+  return found;
+}
+
+// Calls TEST(link, rb, callback filter, other) for each link of O and each neighbour whose box
+// overlaps the link's and that the link's collision filter accepts, until TEST returns true.
+template <class Test>
+static bool each_link_neighbour(World &w, const Object &o, const int *except, int n_except,
+                                Test test) {
+  std::vector<btBroadphaseProxy *> &found = articulated_neighbours(w, o, except, n_except);
+  if (found.empty()) return false;
+  for (size_t l = 0; l < o.link_rb.size(); ++l) {
+    btRigidBody *rb = o.link_rb[l];
+    if (!rb) continue;
+    btVector3 a, b;
+    rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
+    for (btBroadphaseProxy *p : found) {
+      if (!TestAabbAgainstAabb2(a, b, p->m_aabbMin, p->m_aabbMax)) continue;
+      if (test((int)l, rb, p)) return true;
+    }
+  }
+  return false;
+}
+
 // Contacts of every link of the articulated object O with other objects: what contactTest of
 // each link finds, from one broadphase query of the union of the links' boxes (instead of one
 // tree query per link, most of whose hits would be the object's own links).
 static void articulated_contacts(World &w, const Object &o, double threshold, PairList &pairs,
                                  const int *except, int n_except) {
-  btVector3 lo, hi;
-  if (!union_aabb(o, -1, lo, hi)) return;
-  struct Others : btBroadphaseAabbCallback {
-    int self;
-    const int *except;
-    int n_except;
-    std::vector<btBroadphaseProxy *> found;
-    bool process(const btBroadphaseProxy *p) override {
-      auto *co = static_cast<const btCollisionObject *>(p->m_clientObject);
-      int ob = co->getUserIndex();
-      if (ob != self && !excepted(ob, except, n_except))
-        found.push_back(const_cast<btBroadphaseProxy *>(p));
-      return true;
-    }
-  } others;
-  others.self = o.id;
-  others.except = except;
-  others.n_except = n_except;
-  w.dw->getBroadphase()->aabbTest(lo, hi, others);
-  if (others.found.empty()) return;
-  for (size_t l = 0; l < o.link_rb.size(); ++l) {
-    btRigidBody *rb = o.link_rb[l];
-    if (!rb) continue;
+  each_link_neighbour(w, o, except, n_except, [&](int, btRigidBody *rb, btBroadphaseProxy *p) {
     auto *bp = rb->getBroadphaseHandle();
     ObjectContacts cb(w, o.id, threshold, pairs, bp->m_collisionFilterGroup, bp->m_collisionFilterMask);
-    btVector3 a, b;
-    rb->getCollisionShape()->getAabb(rb->getWorldTransform(), a, b);
-    for (btBroadphaseProxy *p : others.found) {
-      if (!TestAabbAgainstAabb2(a, b, p->m_aabbMin, p->m_aabbMax)) continue;
-      if (!cb.needsCollision(p)) continue;
+    if (cb.needsCollision(p))
       w.dw->contactPairTest(rb, static_cast<btCollisionObject *>(p->m_clientObject), cb);
-    }
-  }
+    return false;
+  });
 }
+
+// What CN_OBJECT_FIRST_CONTACT leaves out besides the objects of except: links of the object
+// (skip) and allowed (link, other, other link) triples, -2 standing for any.
+struct ContactRules {
+  const int *skip;
+  int n_skip;
+  const int *allowed;
+  int n_allowed;
+  bool skipped(int link) const {
+    for (int i = 0; i < n_skip; ++i)
+      if (skip[i] == link) return true;
+    return false;
+  }
+  bool allowed_pair(int link, int other, int other_link) const {
+    for (int i = 0; i < n_allowed; ++i) {
+      const int *t = allowed + 3 * i;
+      if ((t[0] == -2 || t[0] == link) && (t[1] == -2 || t[1] == other) &&
+          (t[2] == -2 || t[2] == other_link))
+        return true;
+    }
+    return false;
+  }
+};
+
+// The first contact of SELF's links that the rules do not leave out.
+struct FirstContact : btCollisionWorld::ContactResultCallback {
+  World &w;
+  int self;
+  double threshold;
+  const ContactRules &rules;
+  bool found = false;
+  PairKey key{};
+  FirstContact(World &wd, int s, double t, const ContactRules &r) : w(wd), self(s), threshold(t), rules(r) {
+    m_closestDistanceThreshold = t > 0 ? t : 0;
+  }
+  btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *a, int, int,
+                           const btCollisionObjectWrapper *b, int, int) override {
+    if (found || cp.getDistance() > threshold) return 0;
+    int oa, la, ob, lb;
+    decode_rb(a->getCollisionObject(), oa, la);
+    decode_rb(b->getCollisionObject(), ob, lb);
+    if (oa != self || (ob == self && lb < la)) { std::swap(oa, ob); std::swap(la, lb); }
+    if (w.pair_ignored(oa, la, ob, lb) || rules.skipped(la) || rules.allowed_pair(la, ob, lb))
+      return 0;
+    found = true;
+    key = PairKey{oa, la, ob, lb};
+    return 0;
+  }
+};
 
 static void check_link(const Object &o, int link) {
   if (o.kind == CN_BODY && link != -1)
@@ -287,6 +359,59 @@ int cn_object_contacts_except(int wh, int oh, double threshold, const int *excep
         }
     }
     return write_pairs(pairs, out4, dist, cap);
+  });
+}
+
+int cn_object_first_contact(int wh, int oh, double threshold, const int *except, int n_except,
+                            const int *skip_links, int n_skip, const int *allowed3, int n_allowed,
+                            int *out4) {
+  return guard([&] {
+    World &w = world(wh);
+    Object &o = w.obj(oh);
+    if (o.kind != CN_ARTICULATED)
+      fail(CN_E_ARG, "object %d is a plain body, expected an articulated object", oh);
+    check_finite(threshold, "contact threshold");
+    check_ptr(out4, "contact output");
+    if (n_except < 0 || n_skip < 0 || n_allowed < 0)
+      fail(CN_E_ARG, "counts %d, %d, %d of left-out objects, links and pairs, expected >= 0",
+           n_except, n_skip, n_allowed);
+    if (n_except > 0) check_ptr(except, "objects to leave out");
+    if (n_skip > 0) check_ptr(skip_links, "links to leave out");
+    if (n_allowed > 0) check_ptr(allowed3, "allowed contacts");
+    sync_aabbs_except(w, [&](int ob) { return ob == oh; });
+    ContactRules rules{skip_links, n_skip, allowed3, n_allowed};
+    FirstContact cb(w, oh, threshold, rules);
+    each_link_neighbour(w, o, except, n_except, [&](int l, btRigidBody *rb, btBroadphaseProxy *p) {
+      if (rules.skipped(l)) return false;
+      auto *bp = rb->getBroadphaseHandle();
+      cb.m_collisionFilterGroup = bp->m_collisionFilterGroup;
+      cb.m_collisionFilterMask = bp->m_collisionFilterMask;
+      if (cb.needsCollision(p))
+        w.dw->contactPairTest(rb, static_cast<btCollisionObject *>(p->m_clientObject), cb);
+      return cb.found;
+    });
+    if (!cb.found && o.self_collision) {
+      for (size_t i = 0; i < o.link_rb.size() && !cb.found; ++i) {
+        if (!o.link_rb[i] || rules.skipped((int)i)) continue;
+        for (size_t j = i + 1; j < o.link_rb.size() && !cb.found; ++j) {
+          if (!o.link_rb[j]) continue;
+          int a = (int)i, b = (int)j;
+          int jb = o.model->links[b].parent_joint, ja = o.model->links[a].parent_joint;
+          if ((jb >= 0 && o.model->joints[jb].parent == a) || (ja >= 0 && o.model->joints[ja].parent == b))
+            continue;  // adjacent links always touch
+          if (w.ignored.count(make_key(oh, a, oh, b))) continue;
+          PairDistance pd(o.link_rb[i], threshold);
+          w.dw->contactPairTest(o.link_rb[i], o.link_rb[j], pd);
+          if (pd.found && pd.best <= threshold && !rules.allowed_pair(a, oh, b)) {
+            cb.found = true;
+            cb.key = PairKey{oh, a, oh, b};
+          }
+        }
+      }
+    }
+    if (cb.found)
+      for (int k = 0; k < 4; ++k) out4[k] = cb.key[k];
+    return cb.found ? 1 : 0;
   });
 }
 

@@ -186,6 +186,14 @@ int cn_object_contacts(int world, int obj, double threshold, int *out4, double *
 /* The same, leaving out the contacts with the n_except objects of except (their handles). */
 int cn_object_contacts_except(int world, int obj, double threshold, const int *except,
                               int n_except, int *out4, double *out_dist, int cap);
+/* The first contact of the articulated obj's links (with other objects, and with each other
+ * when its self-collision is on) that is not left out, as (obj, link, other, other_link) in
+ * out4. Left out: the objects of except, the n_skip links of obj in skip_links, and the
+ * n_allowed (link, other, other_link) triples of allowed3 (-2 for any). Returns 1 when there
+ * is such a contact, 0 when there is none: a yes/no collision check that stops at the first. */
+int cn_object_first_contact(int world, int obj, double threshold, const int *except, int n_except,
+                            const int *skip_links, int n_skip, const int *allowed3, int n_allowed,
+                            int *out4);
 /* Closest distance between two objects (link -1 = whole object), searched up to max_dist.
  * out7: distance, point on A xyz, point on B xyz.  Returns 1 if a pair closer than max_dist
  * was found, 0 if not (distance then = max_dist). */

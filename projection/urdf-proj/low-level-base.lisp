@@ -5,29 +5,18 @@
 
 ;;; ---- collisions -----------------------------------------------------------------------------
 
-(defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
-                              ignore-links)
-  "The names of the objects the robot collides with: contacts of its links (except the links
-in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
-with anything but the robot and each other. Contacts of the robot with the floor (static
-planes) and the contacts the motion is meant to make (INTENDED-CONTACTS: the hands with the
-objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do not count."
-  (let* ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
-         (attached-objects (remove nil (mapcar (lambda (name) (btr:object world name)) attached)))
-         (planes (remove :static-plane (btr:objects world) :key #'btr:object-kind :test-not #'eq))
-         (intended (intended-contacts robot))
-         (hits '()))
-    ;; the floor and the carried objects are not looked for: their contacts do not count
-    (loop for (a la b lb) in (btr::contact-records world robot (append planes attached-objects))
-          for other = (if (eq a robot) b a)
-          for link = (if (eq a robot) la lb)
-          for other-link = (if (eq a robot) lb la)
-          unless (or (member (btr:name other) attached)
-                     (eq (btr:object-kind other) :static-plane)
-                     (and link (member link ignore-links :test #'string=))
-                     (intended-contact-p intended robot link other other-link))
-            do (pushnew (btr:name other) hits))
-    (dolist (name attached)
+;; what both collision checks leave out: the floor (static planes) and the carried objects
+(defun collision-excepts (world robot)
+  "The names of ROBOT's attached objects, those objects, and WORLD's static planes."
+  (let ((attached (remove-duplicates (mapcar #'first (btr:attached-objects robot)))))
+    (values attached
+            (remove nil (mapcar (lambda (name) (btr:object world name)) attached))
+            (remove :static-plane (btr:objects world) :key #'btr:object-kind :test-not #'eq))))
+
+(defun attached-object-hits (world robot attached attached-objects intended)
+  "The names of what ROBOT's ATTACHED objects touch besides the robot and each other."
+  (let ((hits '()))
+    (dolist (name attached (nreverse hits))
       (let ((o (btr:object world name)))
         (when o
           (loop for (a la b lb) in (btr::contact-records world o (cons robot attached-objects))
@@ -35,8 +24,69 @@ objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do 
                 for other-link = (if (eq a o) lb la)
                 unless (or (eq other robot) (member (btr:name other) attached)
                            (intended-contact-p intended o nil other other-link))
-                  do (pushnew (btr:name other) hits)))))
-    (nreverse hits)))
+                  do (pushnew (btr:name other) hits)))))))
+
+(defun robot-collisions (&key (world btr:*current-bullet-world*) (robot (robot-object world))
+                              ignore-links)
+  "The names of the objects the robot collides with: contacts of its links (except the links
+in IGNORE-LINKS) with anything but its attached objects, and contacts of its attached objects
+with anything but the robot and each other. Contacts of the robot with the floor (static
+planes) and the contacts the motion is meant to make (INTENDED-CONTACTS: the hands with the
+objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do not count."
+  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
+    (let ((intended (intended-contacts robot))
+          (hits '()))
+      ;; the floor and the carried objects are not looked for: their contacts do not count
+      (loop for (a la b lb) in (btr::contact-records world robot (append planes attached-objects))
+            for other = (if (eq a robot) b a)
+            for link = (if (eq a robot) la lb)
+            for other-link = (if (eq a robot) lb la)
+            unless (or (member (btr:name other) attached)
+                       (eq (btr:object-kind other) :static-plane)
+                       (and link (member link ignore-links :test #'string=))
+                       (intended-contact-p intended robot link other other-link))
+              do (pushnew (btr:name other) hits))
+      (append (nreverse hits)
+              (remove-if (lambda (name) (member name hits))
+                         (attached-object-hits world robot attached attached-objects intended))))))
+
+(defun robot-link-index (robot link)
+  "The index of ROBOT's link named LINK, or NIL when ROBOT has no such link."
+  (position link (btr::km-link-names (btr::%model robot)) :test #'string=))
+
+(defun allowed-contact-triples (world robot intended)
+  "The (MOVING HIT) pairs of INTENDED that concern ROBOT's links, as the native check's
+\(link other other-link) triples (:ANY for any); pairs naming what is not there are left out."
+  (loop for entry in intended
+        for (m h) = (and (consp entry) (consp (cdr entry)) entry)
+        for link = (cond ((eq m t) :any)
+                         ((stringp m) (robot-link-index robot m)))
+        for hit = (cond ((eq h t) (list :any :any))
+                        ((and h (symbolp h))
+                         (let ((o (btr:object world h))) (and o (list (btr:object-handle o) :any))))
+                        ((and (consp h) (stringp (second h)))
+                         (let* ((o (btr:object world (first h)))
+                                (l (and o (btr:robot-object-p o) (robot-link-index o (second h)))))
+                           (and l (list (btr:object-handle o) l)))))
+        when (and link hit) collect (cons link hit)))
+
+(defun robot-collides-p (&key (world btr:*current-bullet-world*) (robot (robot-object world))
+                              ignore-links)
+  "True when ROBOT-COLLISIONS would name anything, found at less cost: the native check stops
+at the first contact that counts."
+  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
+    (let* ((intended (intended-contacts robot))
+           (contact (cram-native:object-first-contact
+                     (btr::world-handle world) (btr:object-handle robot)
+                     :except (mapcar #'btr:object-handle (append planes attached-objects))
+                     :skip-links (remove nil (mapcar (lambda (l) (robot-link-index robot l))
+                                                     ignore-links))
+                     :allowed (allowed-contact-triples world robot intended))))
+      (cond ((null contact)
+             (not (null (attached-object-hits world robot attached attached-objects intended))))
+            ;; a body the belief state does not know: as ROBOT-COLLISIONS counts it
+            ((btr::object-by-handle world (third contact)) t)
+            (t (not (null (robot-collisions :world world :robot robot :ignore-links ignore-links))))))))
 
 ;;; ---- navigation ---------------------------------------------------------------------------------
 

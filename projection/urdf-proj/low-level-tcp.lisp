@@ -81,7 +81,7 @@ the child link of the chain's first joint FIRST-CHILD."
 objects (which may touch only the robot); the lenient modes leave out the hands, fingers, arms
 or attached objects when *BE-STRICT-WITH-COLLISIONS* is true and allow everything otherwise."
   (check-collision-mode collision-mode)
-  (flet ((clear-without (links) (null (robot-collisions :robot robot :ignore-links links))))
+  (flet ((clear-without (links) (not (robot-collides-p :robot robot :ignore-links links))))
     (case collision-mode
       ((nil :avoid-all) (clear-without nil))
       (:allow-all t)
@@ -147,11 +147,45 @@ again only when *BASE-OFFSETS* changed), or only (0 0) without MOVE-BASE. Not to
    (cl-transforms:transform* (cl-transforms:pose->transform tcp-map-pose)
                              (cl-transforms:transform-inv (tcp-in-ee-transform arm robot)))))
 
+(defvar *goal-bound-links* '()
+  "((urdf tip-link) . links): GOAL-BOUND-LINKS computed so far (the newest 8).")
+
+(defun goal-bound-links (chain robot)
+  "The links of ROBOT that the goal of the IK CHAIN fixes in the map: its tip link and every
+link below it (the wrist, the hand, the fingers)."
+  (let ((key (list (btr:urdf robot) (ik-chain-tip-link chain))))
+    (or (cdr (assoc key *goal-bound-links* :test #'equal))
+        (let ((links (link-descendants robot (ik-chain-tip-link chain))))
+          (setf *goal-bound-links*
+                (cons (cons key links) (subseq *goal-bound-links* 0 (min 7 (length *goal-bound-links*)))))
+          links))))
+
+(defun goal-bound-collision-p (chains robot)
+  "True when a link that the goals of CHAINS fix in the map (GOAL-BOUND-LINKS) touches anything
+but the robot, its attached objects, the floor and the contacts the motion is meant to make:
+no other base offset or torso value can free it, as the hand stays at its goal."
+  (let* ((world (btr:world robot))
+         (links (loop for chain in chains append (goal-bound-links chain robot)))
+         (attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
+         (except (remove nil (append (mapcar (lambda (name) (btr:object world name)) attached)
+                                     (remove :static-plane (btr:objects world)
+                                             :key #'btr:object-kind :test-not #'eq))))
+         (intended (intended-contacts robot)))
+    (loop for (a la b lb) in (btr::contact-records world robot except)
+          for other = (if (eq a robot) b a)
+          for link = (if (eq a robot) la lb)
+          for other-link = (if (eq a robot) lb la)
+          thereis (and link (not (eq other robot))
+                       (member link links :test #'string=)
+                       (not (intended-contact-p intended robot link other other-link))))))
+
 (defun reach-tcp-poses (goals collision-mode move-base fixed-torso)
   "Bring each (arm . tcp-map-pose) of GOALS there at once. Tries base offsets and torso values
 in order; the first candidate with IK solutions for every arm that passes the collision check
-is kept. Signals MANIPULATION-POSE-UNREACHABLE (state restored) when none does, and
-MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
+is kept. When the first candidate that fails the strict check (COLLISION-MODE NIL or
+:AVOID-ALL) fails it with a hand at its goal touching the world (GOAL-BOUND-COLLISION-P), no
+other candidate is tried. Signals MANIPULATION-POSE-UNREACHABLE (state restored) when none
+passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
   (let* ((robot (robot-object))
          (arms (mapcar #'car goals))
          ;; (arm ee-pose chain end-effector-link first-joint-child) per goal: what ARM-IK looks up
@@ -165,24 +199,32 @@ MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
          (state0 (btr:joint-states robot))
          (sweep-start (and *sweep-check* (robot-state-vectors robot)))
+         (goal-checked (not (member collision-mode '(nil :avoid-all))))
          (swept nil))
     (block search
-      (dolist (offset (base-candidates move-base))
-        (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
-        (dolist (torso-value torsos)
-          (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
-          (let ((solutions (loop for (nil pose chain ee first-child) in ee-goals
-                                 for q = (chain-ik-from-map chain ee first-child pose robot nil 8)
-                                 unless q do (return nil)
-                                 collect (mapcar #'list (coerce (ik-chain-joint-names chain) 'list) q))))
-            (when (and solutions (= (length solutions) (length ee-goals)))
-              (btr:set-robot-state-from-joints (apply #'append solutions) robot)
-              (if (and (perform-collision-check collision-mode arms robot)
-                       (multiple-value-bind (ok sweeps) (tcp-sweep-verdict sweep-start collision-mode arms robot)
-                         (unless ok (setf swept (or swept sweeps)))
-                         ok))
-                  (return-from search t)
-                  (btr:set-robot-state-from-joints state0 robot))))))
+      (block candidates
+        (dolist (offset (base-candidates move-base))
+          (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
+          (dolist (torso-value torsos)
+            (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
+            (let ((solutions (loop for (nil pose chain ee first-child) in ee-goals
+                                   for q = (chain-ik-from-map chain ee first-child pose robot nil 8)
+                                   unless q do (return nil)
+                                   collect (mapcar #'list (coerce (ik-chain-joint-names chain) 'list) q))))
+              (when (and solutions (= (length solutions) (length ee-goals)))
+                (btr:set-robot-state-from-joints (apply #'append solutions) robot)
+                (let ((clear (perform-collision-check collision-mode arms robot)))
+                  (when (and clear
+                             (multiple-value-bind (ok sweeps)
+                                 (tcp-sweep-verdict sweep-start collision-mode arms robot)
+                               (unless ok (setf swept (or swept sweeps)))
+                               ok))
+                    (return-from search t))
+                  (let ((hopeless (and (not clear) (not goal-checked)
+                                       (setf goal-checked t)
+                                       (goal-bound-collision-p (mapcar #'third ee-goals) robot))))
+                    (btr:set-robot-state-from-joints state0 robot)
+                    (when hopeless (return-from candidates)))))))))
       (setf (btr:pose robot) base0)
       (btr:set-robot-state-from-joints state0 robot)
       (report-sweeps swept :robot robot :before sweep-start)  ; signals under :fail

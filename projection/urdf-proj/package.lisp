@@ -17,7 +17,7 @@
    #:drive #:move-torso #:look-at #:look-at-pose-stamped #:detect #:gripper-action
    #:move-gripper-joint #:move-tcp #:move-joints #:position-arms
    ;; collision modes and checks
-   #:*be-strict-with-collisions* #:robot-collisions #:perform-collision-check #:*grasped-objects*
+   #:*be-strict-with-collisions* #:robot-collisions #:robot-collides-p #:perform-collision-check #:*grasped-objects*
    #:*grasp-container-links* #:*placed-objects*
    ;; inverse kinematics
    #:arm-ik-chain #:ik-chain #:ik-chain-joint-names #:ik-chain-base-link

@@ -168,7 +168,7 @@ robot is put back where it stood."
     (unwind-protect
          (dolist (pose candidates)
            (setf (btr:pose robot) pose)
-           (unless (urdf-proj:robot-collisions :robot robot)
+           (unless (urdf-proj:robot-collides-p :robot robot)
              (let ((grasp (reachable-grasp container action arm amount grasps)))
                (when grasp
                  (push (list pose grasp) found)

@@ -1,5 +1,6 @@
 ;;;; The household demo in projection: set + clean, warm median; and a seeded campaign of
-;;;; household runs on 2 workers, its success rate (CRAM_HOUSEHOLD_RUNS=N for another size).
+;;;; 1 000 household runs on 2 workers from the saved core, its success rate and its wall time
+;;;; (CRAM_HOUSEHOLD_RUNS=N for another size).
 
 (defpackage :cram-bench.household
   (:use :cl :cram-bench))
@@ -10,7 +11,7 @@
 
 (defparameter *household-campaign-runs*
   (let ((v (uiop:getenv "CRAM_HOUSEHOLD_RUNS")))
-    (or (and v (ignore-errors (parse-integer v))) 200))
+    (or (and v (ignore-errors (parse-integer v))) 1000))
   "How many seeded household runs the campaign row runs.")
 
 (defun household-seconds ()
@@ -39,7 +40,11 @@ succeeded (returned and its end state is right)."
          (results (format nil "~a/cram-plans-household-bench-~d.jsonl"
                           (string-right-trim "/" (namestring (uiop:temporary-directory)))
                           (sb-posix:getpid)))
-         (start (now-seconds)))
+         (start (progn
+                  ;; the saved core first: the campaign's time is the runs' time
+                  (uiop:run-program (list tool "--build-core") :output nil :error-output nil
+                                                               :ignore-error-status t)
+                  (now-seconds))))
     (uiop:run-program (list tool "--demo" "household" "--batch"
                             (princ-to-string *household-campaign-runs*) "--seed" "1"
                             "--jobs" "2" "--results" results)
@@ -51,7 +56,19 @@ succeeded (returned and its end state is right)."
            (rate (if (zerop n) 0 (/ (* 100.0 ok) n))))
       (ignore-errors (delete-file results))
       (add-row (format nil "~d seeded household runs (spawn jittered, kitchen varied) on 2 workers: ~
-                            success rate (~d/~d; the campaign took ~a)"
-                       *household-campaign-runs* ok n (format-seconds seconds))
+                            success rate (~d/~d)"
+                       *household-campaign-runs* ok n)
                (format nil "~,1f %" rate) :goal ">= 95 %" :met (and (= n *household-campaign-runs*)
-                                                                    (>= rate 95))))))
+                                                                    (>= rate 95)))
+      (add-row (format nil "~d seeded household runs on 2 workers from the saved core: wall time ~
+                            of the whole campaign (median run ~a)"
+                       *household-campaign-runs* (format-seconds (median-run-seconds records)))
+               (format-seconds seconds)
+               :goal (format nil "<= ~a" (format-seconds (* 180 (/ *household-campaign-runs* 1000))))
+               :met (and (= n *household-campaign-runs*)
+                         (<= seconds (* 180 (/ *household-campaign-runs* 1000))))))))
+
+(defun median-run-seconds (records)
+  "The median of the records' run times (their \"seconds\" field), or NIL."
+  (let ((times (sort (remove nil (mapcar (lambda (r) (gethash "seconds" r)) records)) #'<)))
+    (and times (nth (floor (length times) 2) times))))

@@ -1,0 +1,104 @@
+;;;; Tests of the yes/no collision check of the simulated robot (URDF-PROJ:ROBOT-COLLIDES-P,
+;;;; the native check that stops at the first contact that counts) against the list of what the
+;;;; robot touches (URDF-PROJ:ROBOT-COLLISIONS), and of MOVE-TCP giving up a goal whose hand
+;;;; touches the world.
+
+(in-package :cram-plans-tests.urdf-proj)
+
+(in-suite urdf-proj)
+
+(defun random-between (lo hi state)
+  (+ lo (random (- hi lo) state)))
+
+(defun randomize-arms (state)
+  "Put both arms of the PR2 and its torso into random configurations within their limits."
+  (let ((robot (robot)))
+    (btr:set-robot-state-from-joints
+     (loop for joint in (append (rob-int:get-arm-joints :pr2 :left) (rob-int:get-arm-joints :pr2 :right)
+                                '("torso_lift_joint"))
+           collect (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
+                     (list joint (random-between (max (or lo -3d0) -3d0) (min (or hi 3d0) 3d0) state))))
+     robot)))
+
+(test the-first-contact-check-agrees-with-the-list-of-contacts
+  (with-kitchen
+    (let* ((state (sb-ext:seed-random-state 17))
+           (robot (robot))
+           (left-hand (urdf-proj::hand-links :left robot))
+           (right-arm (append (urdf-proj::hand-links :right robot) (rob-int:get-arm-links :pr2 :right)))
+           (allowed-sets (list '()
+                               '(("r_gripper_palm_link" t))
+                               '((t :iai-kitchen))
+                               '((t bottle-1))
+                               '(("l_forearm_link" (:iai-kitchen "sink_area_surface")))))
+           (colliding 0) (free 0) (disagree '()))
+      (dotimes (i 300)
+        (setf (btr:pose robot)
+              (cl-transforms:make-pose
+               (cl-transforms:make-3d-vector (random-between -2.4d0 -1.3d0 state)
+                                             (random-between -0.6d0 0.6d0 state) 0)
+               (cl-transforms:axis-angle->quaternion (cl-transforms:make-3d-vector 0 0 1)
+                                                     (random-between (- pi) pi state))))
+        (randomize-arms state)
+        (let* ((ignore (nth (random 3 state) (list nil left-hand right-arm)))
+               (urdf-proj:*sweep-allowed-contacts* (nth (random (length allowed-sets) state) allowed-sets))
+               (listed (not (null (urdf-proj:robot-collisions :ignore-links ignore))))
+               (found (urdf-proj:robot-collides-p :ignore-links ignore)))
+          (if listed (incf colliding) (incf free))
+          (unless (eq listed found)
+            (push (list i ignore urdf-proj:*sweep-allowed-contacts* (urdf-proj:robot-collisions :ignore-links ignore))
+                  disagree))))
+      (is (null disagree) "the checks disagree in ~d of 300 states: ~s" (length disagree)
+          (subseq disagree 0 (min 3 (length disagree))))
+      (is (> colliding 30) "only ~d colliding states" colliding)
+      (is (> free 30) "only ~d free states" free))))
+
+(test the-first-contact-check-counts-what-a-carried-object-touches
+  (with-kitchen
+    (let ((robot (robot)))
+      (urdf-proj:with-simulated-robot
+        (urdf-proj:move-joints :park :park)
+        (urdf-proj:drive *grasp-base-pose*))
+      (is (not (urdf-proj:robot-collides-p)))
+      ;; the bottle held by the right hand, pushed into the table top
+      (btr:attach-object robot (btr:object btr:*current-bullet-world* 'bottle-1)
+                         :link "r_gripper_tool_frame")
+      (setf (btr:pose (btr:object btr:*current-bullet-world* 'bottle-1))
+            (cl-transforms:make-pose (cl-transforms:make-3d-vector -2.0 -0.9 0.80)
+                                     (cl-transforms:make-identity-rotation)))
+      (is (equal (urdf-proj:robot-collisions) (list :iai-kitchen)))
+      (is (urdf-proj:robot-collides-p))
+      (let ((urdf-proj:*sweep-allowed-contacts* '((bottle-1 :iai-kitchen))))
+        (is (null (urdf-proj:robot-collisions)))
+        (is (not (urdf-proj:robot-collides-p)))))))
+
+(test the-first-contact-query-names-bad-input
+  (with-kitchen
+    (let ((w (btr::world-handle btr:*current-bullet-world*))
+          (robot (btr:object-handle (robot)))
+          (bottle (btr:object-handle (btr:object btr:*current-bullet-world* 'bottle-1))))
+      (is (null (cram-native:object-first-contact w robot :except (list bottle)
+                                                  :allowed '((:any :any :any)))))
+      (signals error (cram-native:object-first-contact w robot :allowed '((1 2))))
+      (signals error (cram-native:object-first-contact w robot :skip-links '("base_link")))
+      (let ((message (handler-case (progn (cram-native:object-first-contact w bottle) nil)
+                       (error (e) (princ-to-string e)))))
+        (is (search "articulated" message) "~s" message)))))
+
+(test a-tool-goal-whose-hand-touches-the-world-is-given-up-at-once
+  (with-kitchen
+    (urdf-proj:with-simulated-robot
+      (urdf-proj:move-joints :park :park)
+      (urdf-proj:drive *grasp-base-pose*)
+      (urdf-proj:move-torso 0.3))
+    ;; the gripper half inside the table top: no base offset or torso height frees it
+    (let ((goal (ps "map" -2.0 -0.80 0.72 (/ pi -2))))
+      (multiple-value-bind (solves failed)
+          (calls-during 'urdf-proj:solve-ik
+                        (lambda ()
+                          (handler-case (progn (urdf-proj:with-simulated-robot
+                                                 (urdf-proj:move-tcp nil goal))
+                                               nil)
+                            (common-fail:manipulation-low-level-failure () t))))
+        (is (eq t failed))
+        (is (<= 1 solves 12) "~d IK solutions were tried for a hand inside the table" solves)))))
