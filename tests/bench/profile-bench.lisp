@@ -60,7 +60,7 @@
 
 (defparameter *thread-roots* '(cpl::execute-task cpl::release-task)
   "The functions a task thread runs its task in: their self time belongs to no layer (it is part
-of the rest), and their time in a thread that is not the benchmark's counts as thread time.")
+of the rest), and their time in a thread that is not the benchmark's counts as the tasks' time.")
 
 (defvar *self* (make-hash-table :test 'equal :synchronized t) "Layer → self seconds.")
 (defvar *children* nil "Cons cell: seconds spent in wrapped callees of the current wrapped call.")
