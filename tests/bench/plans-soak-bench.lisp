@@ -1,7 +1,7 @@
 ;;;; The memory soak: a long campaign of randomized move-bottle runs (20 000 on 2 workers by
-;;;; default) must run to completion with every index reported, and each worker's RSS must stay
-;;;; flat after warm-up (goal: < 5 MB per 1000 runs). The workers report their RSS and Lisp heap
-;;;; every 1000 runs; the benchmark prints the curve and a verdict line.
+;;;; default) must run to completion with every index reported and no worker dying, and each
+;;;; worker's RSS must stay flat after warm-up (goal: < 5 MB per 1000 runs). The workers report
+;;;; their RSS and Lisp heap every 1000 runs; the benchmark prints the curve and a verdict line.
 ;;;; CRAM_SOAK_RUNS and CRAM_SOAK_JOBS change the size of the campaign (e.g. for a quick try);
 ;;;; CRAM_SOAK_RUNS=0 skips the soak.
 
@@ -92,20 +92,21 @@ return the number of successful runs."
                                               (slope-per-1000 (mapcar (lambda (s) (cons (third s) (fifth s))) points)))))
                   (rss-slopes (remove nil (mapcar #'second slopes)))
                   (worst (and rss-slopes (reduce #'max rss-slopes)))
-                  (met (and worst (< worst *goal-mb-per-1000*))))
+                  ;; the goal: flat memory and no worker that died on the way
+                  (met (and worst (< worst *goal-mb-per-1000*) (null deaths))))
              (print-curve samples)
              (dolist (s slopes)
                (format t "  worker ~a~:[~*~;/r~d~]: after warm-up RSS ~@[~,2@f~]~:[n/a~;~] MB, heap ~@[~,3@f~]~:[n/a~;~] MB per 1000 runs~%"
                        (first (first s)) (plusp (second (first s))) (second (first s)) (second s) (second s) (third s) (third s)))
              (format t "soak verdict: ~:[FAIL~;PASS~] — ~d of ~d runs reported (every index once), ~d succeeded, ~
                         ~d worker death~:p, ~d s; largest RSS growth after warm-up ~:[n/a~;~:*~,2f MB~] per 1000 runs ~
-                        (goal < ~d MB)~%"
+                        (goal < ~d MB, no worker death)~%"
                      met n n ok (length deaths) (round seconds) worst *goal-mb-per-1000*)
              (add-row (format nil "soak: ~d move-bottle runs on ~d workers complete (~d worker death~:p), ~
                                worst RSS growth per 1000 runs after warm-up"
                               n jobs (length deaths))
                       (if worst (format nil "~,2f MB" worst) "n/a")
-                      :goal (format nil "< ~d MB" *goal-mb-per-1000*) :met met)))
+                      :goal (format nil "< ~d MB, no worker death" *goal-mb-per-1000*) :met met)))
       (when (probe-file path) (delete-file path)))))
 
 (define-benchmark plans-soak ()
