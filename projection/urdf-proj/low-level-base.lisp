@@ -50,25 +50,61 @@ objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do 
               (remove-if (lambda (name) (member name hits))
                          (attached-object-hits world robot attached attached-objects intended))))))
 
+(defvar *link-indices* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "Kinematic model of an articulated object -> EQUAL hash table of its link names' indices.")
+
 (defun robot-link-index (robot link)
-  "The index of ROBOT's link named LINK, or NIL when ROBOT has no such link."
-  (position link (btr::km-link-names (btr::%model robot)) :test #'string=))
+  "The index of the link named LINK of ROBOT (an articulated object), or NIL when it has none."
+  (let* ((model (btr::%model robot))
+         (table (or (gethash model *link-indices*)
+                    (setf (gethash model *link-indices*)
+                          (let ((table (make-hash-table :test 'equal)))
+                            (loop for name across (btr::km-link-names model) for i from 0
+                                  do (setf (gethash name table) i))
+                            table)))))
+    (values (gethash link table))))
+
+(defvar *last-allowed-triples* nil
+  "(world robot intended triples objects): the last answer of ALLOWED-CONTACT-TRIPLES and the
+\(name . handle) of the objects it names.")
 
 (defun allowed-contact-triples (world robot intended)
   "The (MOVING HIT) pairs of INTENDED that concern ROBOT's links, as the native check's
-\(link other other-link) triples (:ANY for any); pairs naming what is not there are left out."
-  (loop for entry in intended
-        for (m h) = (and (consp entry) (consp (cdr entry)) entry)
-        for link = (cond ((eq m t) :any)
-                         ((stringp m) (robot-link-index robot m)))
-        for hit = (cond ((eq h t) (list :any :any))
-                        ((and h (symbolp h))
-                         (let ((o (btr:object world h))) (and o (list (btr:object-handle o) :any))))
-                        ((and (consp h) (stringp (second h)))
-                         (let* ((o (btr:object world (first h)))
-                                (l (and o (btr:robot-object-p o) (robot-link-index o (second h)))))
-                           (and l (list (btr:object-handle o) l)))))
-        when (and link hit) collect (cons link hit)))
+\(link other other-link) triples (:ANY for any); pairs naming what is not there are left out.
+The last answer is kept while the objects it names are the same: a motion's checks ask with
+the same pairs again and again."
+  (destructuring-bind (&optional w r i triples objects) *last-allowed-triples*
+    (if (and (eq w world) (eq r robot) (equal i intended)
+             (loop for (name . handle) in objects
+                   always (let ((o (btr:object world name)))
+                            (and o (eql (btr:object-handle o) handle)))))
+        triples
+        (multiple-value-bind (triples objects) (compute-allowed-triples world robot intended)
+          (setf *last-allowed-triples* (list world robot intended triples objects))
+          triples))))
+
+(defun compute-allowed-triples (world robot intended)
+  (let ((objects '()))
+    (flet ((handle (name)
+             (let ((o (btr:object world name)))
+               (when o
+                 (pushnew (cons name (btr:object-handle o)) objects :test #'equal)
+                 (btr:object-handle o)))))
+      (values
+       (loop for entry in intended
+             for (m h) = (and (consp entry) (consp (cdr entry)) entry)
+             for link = (cond ((eq m t) :any)
+                              ((stringp m) (robot-link-index robot m)))
+             for hit = (cond ((eq h t) (list :any :any))
+                             ((and h (symbolp h))
+                              (let ((handle (handle h))) (and handle (list handle :any))))
+                             ((and (consp h) (stringp (second h)))
+                              (let* ((o (btr:object world (first h)))
+                                     (l (and o (btr:robot-object-p o)
+                                             (robot-link-index o (second h)))))
+                                (and l (list (handle (first h)) l)))))
+             when (and link hit) collect (cons link hit))
+       objects))))
 
 (defun robot-collides-p (&key (world btr:*current-bullet-world*) (robot (robot-object world))
                               ignore-links)

@@ -35,6 +35,11 @@ succeeded (returned and its end state is right)."
     (add-row (format nil "household demo set + clean in projection, warm median of 5 (~d/5 succeeded)" ok)
              (format-seconds median) :goal "<= 300 ms" :met (and (= ok 5) (<= median 0.3)))))
 
+(defun median-run-seconds (records)
+  "The median of the records' run times (their \"seconds\" field), or NIL."
+  (let ((times (sort (remove nil (mapcar (lambda (r) (gethash "seconds" r)) records)) #'<)))
+    (and times (nth (floor (length times) 2) times))))
+
 (define-benchmark household-campaign ()
   (let* ((tool (namestring (merge-pathnames "cram-plans-run" *tools-directory*)))
          (results (format nil "~a/cram-plans-household-bench-~d.jsonl"
@@ -67,8 +72,3 @@ succeeded (returned and its end state is right)."
                :goal (format nil "<= ~a" (format-seconds (* 180 (/ *household-campaign-runs* 1000))))
                :met (and (= n *household-campaign-runs*)
                          (<= seconds (* 180 (/ *household-campaign-runs* 1000))))))))
-
-(defun median-run-seconds (records)
-  "The median of the records' run times (their \"seconds\" field), or NIL."
-  (let ((times (sort (remove nil (mapcar (lambda (r) (gethash "seconds" r)) records)) #'<)))
-    (and times (nth (floor (length times) 2) times))))
