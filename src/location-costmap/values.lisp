@@ -17,22 +17,35 @@
   (unless (cost-functions costmap)
     (error 'no-cost-functions-registered :costmap costmap)))
 
+(defun grid-sum (grid)
+  "The sum of the cells of GRID, a double-float array."
+  (declare (type (simple-array double-float (* *)) grid) (optimize speed))
+  (let ((total 0d0))
+    (declare (type double-float total))
+    (dotimes (i (array-total-size grid) total)
+      (incf total (row-major-aref grid i)))))
+
+(defun divided-grid (grid divisor)
+  "A fresh array of GRID's cells divided by DIVISOR."
+  (declare (type (simple-array double-float (* *)) grid) (type double-float divisor)
+           (optimize speed))
+  (let ((divided (make-array (array-dimensions grid) :element-type 'double-float)))
+    (dotimes (i (array-total-size grid) divided)
+      (setf (row-major-aref divided i) (/ (row-major-aref grid i) divisor)))))
+
 (defun normalized-grid (costmap)
   "(values grid total): COSTMAP's grid divided by the sum of its cells, and that sum."
   (let ((cached (%normalized costmap)))
     (if cached
         (values (cdr cached) (car cached))
         (let* ((raw (cost-grid costmap))
-               (total (loop for i below (array-total-size raw) sum (row-major-aref raw i))))
-          (declare (type (simple-array double-float (* *)) raw) (type double-float total))
+               (total (grid-sum raw)))
           (when (zerop total)
             (error 'invalid-probability-distribution
                    :costmap costmap
                    :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
                                    (mapcar #'first (cost-functions costmap)))))
-          (let ((grid (make-array (array-dimensions raw) :element-type 'double-float)))
-            (dotimes (i (array-total-size raw))
-              (setf (row-major-aref grid i) (/ (row-major-aref raw i) total)))
+          (let ((grid (divided-grid raw total)))
             (setf (%normalized costmap) (cons total grid))
             (values grid total))))))
 
