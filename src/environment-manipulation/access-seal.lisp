@@ -8,8 +8,8 @@
 (defparameter *relocation-retries* 50 "Extra robot locations tried before giving up.")
 (defparameter *arm-retries* 1 "Extra arms tried at one robot location.")
 (defparameter *fallback-base-pose-count* 5
-  "Base poses in front of a handle computed when an accessing or sealing action has no
-ROBOT-LOCATION.")
+  "How many base poses in front of a handle an accessing or sealing action without a
+ROBOT-LOCATION tries at most (each found when it is needed).")
 
 (defun location-container (location)
   "The container designator of LOCATION: the object of (in C) or (above C), or NIL."
@@ -26,10 +26,15 @@ CONTAINER's handle."
               (progn (setf first nil) (desig:reference current))
               (let ((next (ignore-errors (desig:next-solution current))))
                 (when next (setf current next) (desig:reference next))))))
-      (let ((poses (let ((amount (container-opening-amount container action distance)))
-                     (mapcar #'first (container-base-poses container action arm amount
-                                                           :count *fallback-base-pose-count*)))))
-        (lambda () (let ((pose (pop poses))) (and pose (map-stamped pose)))))))
+      (let ((next (container-base-pose-finder container action arm
+                                              (container-opening-amount container action distance)))
+            (left *fallback-base-pose-count*))
+        ;; each pose looked for when it is asked for, in the robot's state then
+        (lambda ()
+          (when (plusp left)
+            (decf left)
+            (let ((found (funcall next)))
+              (and found (map-stamped (first found)))))))))
 
 (defun perform-container-action (action container-designator arm grasps distance)
   (let ((?object container-designator) (?arm arm) (?distance distance) (?grasps grasps)

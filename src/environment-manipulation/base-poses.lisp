@@ -152,26 +152,35 @@ asks the solver once.")
                           collect (base-pose-facing x y (- (cl-transforms:x middle) x)
                                                     (- (cl-transforms:y middle) y)))))))
 
+(defun container-base-pose-finder (container action arm amount &key grasps)
+  "A function returning, each time it is called, the next base pose (map, on the floor) from
+which ARM can ACTION (:OPEN or :CLOSE) CONTAINER by AMOUNT, as (pose grasp) with the first of
+GRASPS (default: all handle grasps) that works there: collision-free and with IK solutions
+along the trajectory; NIL when no candidate is left. Each call checks only as many candidates
+as it needs, in the robot's state at the time, and puts the robot back where it stood."
+  (let* ((robot (urdf-proj:robot-object))
+         (grasps (container-grasps container grasps))
+         (candidates (if (eq (container-joint-type container) :prismatic)
+                         (prismatic-base-candidates container action arm amount)
+                         (revolute-base-candidates
+                          container (container-trajectory container action (first grasps) amount)))))
+    (lambda ()
+      (let ((start (btr:pose robot)))
+        (unwind-protect
+             (loop for pose = (pop candidates)
+                   while pose
+                   do (setf (btr:pose robot) pose)
+                      (unless (urdf-proj:robot-collides-p :robot robot)
+                        (let ((grasp (reachable-grasp container action arm amount grasps)))
+                          (when grasp (return (list pose grasp))))))
+          (setf (btr:pose robot) start))))))
+
 (defun container-base-poses (container action arm amount &key grasps (count 1))
   "Up to COUNT base poses (map, on the floor) from which ARM can ACTION (:OPEN or :CLOSE)
 CONTAINER by AMOUNT, each as (pose grasp) with the first of GRASPS (default: all handle
 grasps) that works there: collision-free and with IK solutions along the trajectory. The
 robot is put back where it stood."
-  (let* ((robot (urdf-proj:robot-object))
-         (start (btr:pose robot))
-         (grasps (container-grasps container grasps))
-         (candidates (if (eq (container-joint-type container) :prismatic)
-                         (prismatic-base-candidates container action arm amount)
-                         (revolute-base-candidates
-                          container (container-trajectory container action (first grasps) amount))))
-         (found '()))
-    (unwind-protect
-         (dolist (pose candidates)
-           (setf (btr:pose robot) pose)
-           (unless (urdf-proj:robot-collides-p :robot robot)
-             (let ((grasp (reachable-grasp container action arm amount grasps)))
-               (when grasp
-                 (push (list pose grasp) found)
-                 (when (>= (length found) count) (return))))))
-      (setf (btr:pose robot) start))
-    (nreverse found)))
+  (loop with next = (container-base-pose-finder container action arm amount :grasps grasps)
+        repeat count
+        for found = (funcall next)
+        while found collect found))

@@ -17,7 +17,7 @@
    #:container-joint-limits #:container-opening-amount #:container-default-target
    #:container-designator-container
    ;; trajectories and base poses
-   #:handle-grasp-transform #:container-trajectory #:container-base-poses
+   #:handle-grasp-transform #:container-trajectory #:container-base-poses #:container-base-pose-finder
    ;; belief state
    #:attach-object-to-touched-links #:detach-object-from-environment
    #:*environment-joint-state-hooks*

@@ -17,21 +17,32 @@
   (unless (cost-functions costmap)
     (error 'no-cost-functions-registered :costmap costmap)))
 
-(defun grid-sum (grid)
-  "The sum of the cells of GRID, a double-float array."
+(defun grid-sum (grid region)
+  "The sum of the cells of GRID, a double-float array that is 0 outside REGION (row-0 row-1
+col-0 col-1), added in row-major order."
   (declare (type (simple-array double-float (* *)) grid) (optimize speed))
-  (let ((total 0d0))
-    (declare (type double-float total))
-    (dotimes (i (array-total-size grid) total)
-      (incf total (row-major-aref grid i)))))
+  (destructuring-bind (r0 r1 c0 c1) region
+    (declare (type fixnum r0 r1 c0 c1))
+    (let ((total 0d0))
+      (declare (type double-float total))
+      (loop for r of-type fixnum from r0 below r1
+            do (loop for c of-type fixnum from c0 below c1
+                     do (incf total (aref grid r c))))
+      total)))
 
-(defun divided-grid (grid divisor)
-  "A fresh array of GRID's cells divided by DIVISOR."
+(defun divided-grid (grid divisor region)
+  "A fresh array of GRID's cells divided by DIVISOR; GRID is 0 outside REGION (row-0 row-1
+col-0 col-1), and so is the copy."
   (declare (type (simple-array double-float (* *)) grid) (type double-float divisor)
            (optimize speed))
-  (let ((divided (make-array (array-dimensions grid) :element-type 'double-float)))
-    (dotimes (i (array-total-size grid) divided)
-      (setf (row-major-aref divided i) (/ (row-major-aref grid i) divisor)))))
+  (let ((divided (make-array (array-dimensions grid) :element-type 'double-float
+                                                     :initial-element 0d0)))
+    (destructuring-bind (r0 r1 c0 c1) region
+      (declare (type fixnum r0 r1 c0 c1))
+      (loop for r of-type fixnum from r0 below r1
+            do (loop for c of-type fixnum from c0 below c1
+                     do (setf (aref divided r c) (/ (aref grid r c) divisor)))))
+    divided))
 
 (defun normalized-grid (costmap)
   "(values grid total): COSTMAP's grid divided by the sum of its cells, and that sum."
@@ -39,13 +50,14 @@
     (if cached
         (values (cdr cached) (car cached))
         (let* ((raw (cost-grid costmap))
-               (total (grid-sum raw)))
+               (region (%region costmap))
+               (total (grid-sum raw region)))
           (when (zerop total)
             (error 'invalid-probability-distribution
                    :costmap costmap
                    :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
                                    (mapcar #'first (cost-functions costmap)))))
-          (let ((grid (divided-grid raw total)))
+          (let ((grid (divided-grid raw total region)))
             (setf (%normalized costmap) (cons total grid))
             (values grid total))))))
 
