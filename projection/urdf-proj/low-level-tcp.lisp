@@ -160,10 +160,16 @@ link below it (the wrist, the hand, the fingers)."
                 (cons (cons key links) (subseq *goal-bound-links* 0 (min 7 (length *goal-bound-links*)))))
           links))))
 
+(defparameter *goal-bound-penetration* 0.01d0
+  "Metres a link that the tool goal fixes must reach into the world before MOVE-TCP gives the
+goal up at once: more than the IK tolerances can move the hand (a touch may come and go with
+another IK solution).")
+
 (defun goal-bound-collision-p (chains robot)
-  "True when a link that the goals of CHAINS fix in the map (GOAL-BOUND-LINKS) touches anything
-but the robot, its attached objects, the floor and the contacts the motion is meant to make:
-no other base offset or torso value can free it, as the hand stays at its goal."
+  "True when a link that the goals of CHAINS fix in the map (GOAL-BOUND-LINKS) reaches more
+than *GOAL-BOUND-PENETRATION* into anything but the robot, its attached objects, the floor and
+the contacts the motion is meant to make: no other base offset or torso value can free it, as
+the hand stays at its goal."
   (let* ((world (btr:world robot))
          (links (loop for chain in chains append (goal-bound-links chain robot)))
          (attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
@@ -171,11 +177,16 @@ no other base offset or torso value can free it, as the hand stays at its goal."
                                      (remove :static-plane (btr:objects world)
                                              :key #'btr:object-kind :test-not #'eq))))
          (intended (intended-contacts robot)))
-    (loop for (a la b lb) in (btr::contact-records world robot except)
+    (loop for (ha la hb lb) in (cram-native:object-contacts
+                                (btr::world-handle world) (btr:object-handle robot)
+                                :threshold (- *goal-bound-penetration*)
+                                :except (mapcar #'btr:object-handle except))
+          for a = (btr::object-by-handle world ha)
+          for b = (btr::object-by-handle world hb)
           for other = (if (eq a robot) b a)
-          for link = (if (eq a robot) la lb)
-          for other-link = (if (eq a robot) lb la)
-          thereis (and link (not (eq other robot))
+          for link = (if (eq a robot) (btr::link-name-of a la) (btr::link-name-of b lb))
+          for other-link = (if (eq a robot) (btr::link-name-of b lb) (btr::link-name-of a la))
+          thereis (and a b link (not (eq other robot))
                        (member link links :test #'string=)
                        (not (intended-contact-p intended robot link other other-link))))))
 
