@@ -202,23 +202,67 @@ clauses for a compound first argument."
 ;;; Calls with their arguments passed one by one (1 to 4 of them): no argument list is made
 ;;; unless a choice point must keep the arguments.
 
+(defmacro positional-match-head (m clause &rest as)
+  "Like MATCH-HEAD for the arguments AS passed one by one."
+  `(let ((n (clause-nvars ,clause)))
+     (declare (type fixnum n))
+     (if (zerop n)
+         (and (funcall (the function (clause-match-n ,clause)) ,m +empty-frame+ ,@as)
+              +empty-frame+)
+         (let ((scratch (machine-scratch ,m)))
+           (when (< (length scratch) n)
+             (setf scratch (grow-scratch ,m n)))
+           (and (funcall (the function (clause-match-n ,clause)) ,m scratch ,@as) scratch)))))
+
+(defmacro define-positional-resume (n)
+  "RESUME-CLAUSES-N and RETRY-CLAUSES-N: RESUME-CLAUSES and RETRY-CLAUSES for clauses of N
+arguments, under a choice point whose data slot 1 holds the list of the call's arguments."
+  (let ((resume (intern (format nil "RESUME-CLAUSES-~d" n)))
+        (retry (intern (format nil "RETRY-CLAUSES-~d" n)))
+        (as (loop for i from 1 to n collect (gensym "A"))))
+    `(progn
+       (defun ,resume (m index clauses)
+         (declare (type machine m) (type fixnum index) (optimize (safety 0)))
+         (let* ((args (cp-data m index 1))
+                (cont (cp-data m index 2))
+                ,@(loop for a in as
+                        collect `(,a (prog1 (car args) (setf args (cdr args))))))
+           (loop
+             (let ((clause (car clauses))
+                   (rest (cdr clauses)))
+               (declare (type clause clause))
+               (when (null rest)
+                 (setf (machine-cp-top m) index)
+                 (let ((frame (positional-match-head m clause ,@as)))
+                   (return (and frame (enter-body m clause frame cont index)))))
+               (setf (cp-data m index 0) rest)
+               (let ((frame (positional-match-head m clause ,@as)))
+                 (when frame
+                   (return (enter-body m clause frame cont index)))
+                 (undo-trail m (svref (machine-cps m) index))
+                 (setf clauses rest))))))
+       (defun ,retry (m index)
+         (,resume m index (cp-data m index 0))))))
+
+(define-positional-resume 1)
+(define-positional-resume 2)
+(define-positional-resume 3)
+(define-positional-resume 4)
+
 (defmacro run-selected-positional (m selected cont &rest as)
-  "Try the clauses SELECTED (a list; NIL fails) on the arguments AS, like TRY-CLAUSES: the
-head of a single clause is matched against AS directly."
-  `(let ((selected ,selected))
-     (when selected
-       (count-step ,m)
-       (if (cdr selected)
-           (resume-clauses ,m (push-cp ,m #'retry-clauses selected (list ,@as) ,cont) selected)
-           (let* ((clause (car selected))
-                  (n (clause-nvars clause))
-                  (frame (if (zerop n)
-                             +empty-frame+
-                             (let ((scratch (machine-scratch ,m)))
-                               (if (< (length scratch) n) (grow-scratch ,m n) scratch)))))
-             (declare (type clause clause) (type fixnum n) (type simple-vector frame))
-             (when (funcall (the function (clause-match-n clause)) ,m frame ,@as)
-               (enter-body ,m clause frame ,cont (machine-cp-top ,m))))))))
+  "Try the clauses SELECTED (a list; NIL fails) on the arguments AS, like TRY-CLAUSES."
+  (let ((resume (intern (format nil "RESUME-CLAUSES-~d" (length as))))
+        (retry (intern (format nil "RETRY-CLAUSES-~d" (length as)))))
+    `(let ((selected ,selected))
+       (when selected
+         (count-step ,m)
+         (if (cdr selected)
+             (,resume ,m (push-cp ,m #',retry selected (list ,@as) ,cont) selected)
+             (let* ((clause (car selected))
+                    (frame (positional-match-head ,m clause ,@as)))
+               (declare (type clause clause))
+               (when frame
+                 (enter-body ,m clause frame ,cont (machine-cp-top ,m)))))))))
 
 (defmacro positional-clauses-entry (n clauses lookup cons-clauses)
   "The entry (M A1 ... AN CONT) of CLAUSES selected as LOOKUP and CONS-CLAUSES say (see

@@ -48,6 +48,7 @@ something: assert, retract, simulate) are always signalled.")
   (dynamic '())                         ; facts added with ADD-FACT, in order
   (handler nil)                         ; (lambda (bindings &rest args)) → lazy list of alists
   (native nil)                          ; (lambda (m args cont)) for built-ins
+  (native-positional nil)               ; NIL or (n . (lambda (m a1 ... an cont))) for built-ins
   (control nil)                         ; compiler of a control construct: (lambda (args)) → goal
   (warned nil))
 
@@ -152,7 +153,12 @@ query over facts returned stays valid while it is the same."
   (with-database-lock ()
     (cond ((or (pred-native pred) (pred-control pred))
            (setf (pred-entry pred) (or (pred-native pred) (control-entry pred)))
-           (set-positional-entries pred (listing-entries pred)))
+           (let ((positional (and (pred-native pred) (pred-native-positional pred))))
+             (set-positional-entries
+              pred (lambda (n)
+                     (if (and positional (= n (the fixnum (car positional))))
+                         (cdr positional)
+                         (funcall (the function (listing-entries pred)) n))))))
           (t
            (let* ((clauses (loop for (nil . forms) in (pred-sources pred)
                                  append (mapcar #'compile-clause forms)))
