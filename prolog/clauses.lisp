@@ -216,17 +216,16 @@ clauses for a compound first argument."
 
 (defmacro define-positional-resume (n)
   "RESUME-CLAUSES-N and RETRY-CLAUSES-N: RESUME-CLAUSES and RETRY-CLAUSES for clauses of N
-arguments, under a choice point whose data slot 1 holds the list of the call's arguments."
+arguments, under a choice point whose data slots 1, 3, 4 and 5 hold the call's arguments."
   (let ((resume (intern (format nil "RESUME-CLAUSES-~d" n)))
         (retry (intern (format nil "RETRY-CLAUSES-~d" n)))
         (as (loop for i from 1 to n collect (gensym "A"))))
     `(progn
        (defun ,resume (m index clauses)
          (declare (type machine m) (type fixnum index) (optimize (safety 0)))
-         (let* ((args (cp-data m index 1))
-                (cont (cp-data m index 2))
-                ,@(loop for a in as
-                        collect `(,a (prog1 (car args) (setf args (cdr args))))))
+         (let (,@(loop for a in as for slot in '(1 3 4 5)
+                       collect `(,a (cp-data m index ,slot)))
+               (cont (cp-data m index 2)))
            (loop
              (let ((clause (car clauses))
                    (rest (cdr clauses)))
@@ -257,7 +256,7 @@ arguments, under a choice point whose data slot 1 holds the list of the call's a
        (when selected
          (count-step ,m)
          (if (cdr selected)
-             (,resume ,m (push-cp ,m #',retry selected (list ,@as) ,cont) selected)
+             (,resume ,m (push-cp ,m #',retry selected ,(first as) ,cont ,@(rest as)) selected)
              (let* ((clause (car selected))
                     (frame (positional-match-head ,m clause ,@as)))
                (declare (type clause clause))

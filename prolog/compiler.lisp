@@ -143,7 +143,10 @@ kinds not listed keep VAR a variable; otherwise the last kind stands for all oth
      (case ,kind
        (0 (setf (svref ,frame d) ,x) t)
        (1 (let ((y (deref (svref ,frame d))) (x (deref ,x)))
-            (or (eq x y) (unify-terms ,m y x))))
+            (cond ((eq x y) t)
+                  ;; two different symbols: no need to call the unifier
+                  ((and (symbolp x) (symbolp y)) nil)
+                  (t (unify-terms ,m y x)))))
        (2 t)
        (3 (let ((x (deref ,x)))
             (cond ((eq x d) t)
