@@ -158,9 +158,11 @@ kinds not listed keep VAR a variable; otherwise the last kind stands for all oth
 
 (defun classify-build-element (p)
   "Kind and datum of source pattern P for BUILD-ELEMENT: 0 a variable with a value, 1 a
-constant, 2 anonymous, 3 a builder closure."
+constant, 2 anonymous, 3 a builder closure, 4 a variable's first occurrence (a new variable
+stored in the frame). Updates *SEEN* like COMPILE-BUILD."
   (cond ((anonymous-var-p p) (values 2 nil))
         ((and (source-var-p p) (member p *seen* :test #'eq)) (values 0 (var-index p)))
+        ((source-var-p p) (let ((i (var-index p))) (push p *seen*) (values 4 i)))
         ((not (has-source-vars-p p)) (values 1 p))
         (t (values 3 (compile-build p)))))
 
@@ -170,6 +172,7 @@ constant, 2 anonymous, 3 a builder closure."
        (0 (svref ,frame d))
        (1 d)
        (2 (make-pvar))
+       (4 (setf (svref ,frame d) (make-pvar)))
        (t (funcall (the function d) ,frame)))))
 
 (defun compile-build (p)
@@ -186,7 +189,7 @@ constant, 2 anonymous, 3 a builder closure."
         (t (multiple-value-bind (kcar dcar) (classify-build-element (car p))
              (multiple-value-bind (kcdr dcdr) (classify-build-element (cdr p))
                (declare (type fixnum kcar kcdr))
-               (with-constant-kinds ((kcar (0 1 2 3)) (kcdr (0 1 2 3)))
+               (with-constant-kinds ((kcar (0 1 2 4 3)) (kcdr (0 1 2 4 3)))
                  (lambda (frame)
                    (declare (type simple-vector frame) (optimize (safety 0)))
                    (let ((a (build-element kcar dcar frame)))
