@@ -83,6 +83,7 @@
                (:file "terms")
                (:file "predicates")
                (:file "compiler")
+               (:file "clauses")
                (:file "control")
                (:file "database")
                (:file "builtins")

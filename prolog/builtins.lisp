@@ -4,10 +4,13 @@
 
 (declaim (optimize (speed 3) (safety 1) (debug 0)))
 
-(defun register-native (name function)
+(defun register-native (name function &optional positional)
+  "Make FUNCTION, (lambda (m args cont)), the definition of the predicate NAME. POSITIONAL, when
+given, is (n . entry): ENTRY (lambda (m a1 ... an cont)) serves calls with N arguments."
   (with-database-lock ()
     (let ((pred (ensure-pred name)))
-      (setf (pred-native pred) function)
+      (setf (pred-native pred) function
+            (pred-native-positional pred) positional)
       (setf (gethash (symbol-name name) *builtin-names*) pred)
       (invalidate-pred pred)
       name)))
@@ -42,7 +45,13 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
                                               ,default))))
                  ,@(when rest `((,rest ,args))))
             ,@(unless rest `((unless (null (deref ,args)) (return-from ,block nil))))
-            ,@body))))))
+            ,@body)))
+      ;; only required arguments: calls with that many take them one by one
+      ,@(when (and (null optional-at) (null rest-at) (<= 1 (length required) 4))
+          `((cons ,(length required)
+                  (lambda (,m ,@required ,cont)
+                    (declare (ignorable ,m ,cont) (type function ,cont))
+                    ,@body)))))))
 
 (defmacro solve-continue (cont)
   "Inside DEF-NATIVE-PREDICATE: succeed, continuing with the rest of the proof."

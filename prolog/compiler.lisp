@@ -27,6 +27,8 @@
   (nvars 0 :type fixnum)
   (nhead 0 :type fixnum)  ; frame slots 0 .. NHEAD-1 hold the head's variables
   (match nil :type function)
+  (arity -1 :type fixnum) ; number of head arguments, -1 when they are not a proper list
+  (match-n nil)           ; for ARITY 1 .. 4: matcher (M FRAME A1 ... AN) of the arguments
   (init '() :type list)   ; ((index . name) ...) of body-only variables
   (frameless nil)         ; the body is one predicate call: it runs in the head's frame
   (body nil)              ; NIL for a fact
@@ -141,7 +143,10 @@ kinds not listed keep VAR a variable; otherwise the last kind stands for all oth
      (case ,kind
        (0 (setf (svref ,frame d) ,x) t)
        (1 (let ((y (deref (svref ,frame d))) (x (deref ,x)))
-            (or (eq x y) (unify-terms ,m y x))))
+            (cond ((eq x y) t)
+                  ;; two different symbols: no need to call the unifier
+                  ((and (symbolp x) (symbolp y)) nil)
+                  (t (unify-terms ,m y x)))))
        (2 t)
        (3 (let ((x (deref ,x)))
             (cond ((eq x d) t)
@@ -153,9 +158,11 @@ kinds not listed keep VAR a variable; otherwise the last kind stands for all oth
 
 (defun classify-build-element (p)
   "Kind and datum of source pattern P for BUILD-ELEMENT: 0 a variable with a value, 1 a
-constant, 2 anonymous, 3 a builder closure."
+constant, 2 anonymous, 3 a builder closure, 4 a variable's first occurrence (a new variable
+stored in the frame). Updates *SEEN* like COMPILE-BUILD."
   (cond ((anonymous-var-p p) (values 2 nil))
         ((and (source-var-p p) (member p *seen* :test #'eq)) (values 0 (var-index p)))
+        ((source-var-p p) (let ((i (var-index p))) (push p *seen*) (values 4 i)))
         ((not (has-source-vars-p p)) (values 1 p))
         (t (values 3 (compile-build p)))))
 
@@ -165,6 +172,7 @@ constant, 2 anonymous, 3 a builder closure."
        (0 (svref ,frame d))
        (1 d)
        (2 (make-pvar))
+       (4 (setf (svref ,frame d) (make-pvar)))
        (t (funcall (the function d) ,frame)))))
 
 (defun compile-build (p)
@@ -181,7 +189,7 @@ constant, 2 anonymous, 3 a builder closure."
         (t (multiple-value-bind (kcar dcar) (classify-build-element (car p))
              (multiple-value-bind (kcdr dcdr) (classify-build-element (cdr p))
                (declare (type fixnum kcar kcdr))
-               (with-constant-kinds ((kcar (0 1 2 3)) (kcdr (0 1 2 3)))
+               (with-constant-kinds ((kcar (0 1 2 4 3)) (kcdr (0 1 2 4 3)))
                  (lambda (frame)
                    (declare (type simple-vector frame) (optimize (safety 0)))
                    (let ((a (build-element kcar dcar frame)))
@@ -254,8 +262,26 @@ constant, 2 anonymous, 3 a builder closure."
              (let ((a (deref a)))
                (or (null a) (and (pvar-p a) (bind-var m a nil)))))))))))
 
+(defmacro positional-args-matcher (n kinds data)
+  "A matcher (M FRAME A1 ... AN) of N arguments passed one by one, from the classified elements
+in the vectors KINDS and DATA."
+  (let ((ks (loop repeat n collect (gensym "K")))
+        (ds (loop repeat n collect (gensym "D")))
+        (as (loop repeat n collect (gensym "A"))))
+    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
+           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
+       (declare (type fixnum ,@ks))
+       (with-constant-kinds ,(if (<= n 3)
+                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
+                                 '())
+         (lambda (m frame ,@as)
+           (declare (type simple-vector frame) (optimize (safety 0)))
+           (and ,@(loop for k in ks for d in ds for a in as
+                        collect `(match-element ,k ,d m frame ,a))))))))
+
 (defun compile-args-match (patterns)
-  "Like COMPILE-MATCH for a whole argument list PATTERNS."
+  "Like COMPILE-MATCH for a whole argument list PATTERNS. For a proper list of 1 to 4
+patterns, the second value is a matcher (M FRAME A1 ... AN) of the arguments passed one by one."
   (if (or (not (alexandria:proper-list-p patterns)) (null patterns))
       (compile-match patterns)
       (let* ((k (length patterns))
@@ -275,7 +301,9 @@ constant, 2 anonymous, 3 a builder closure."
         (macrolet ((by-arity ()
                      `(case k
                         ,@(loop for n in *unrolled-arities*
-                                collect `(,n (unrolled-args-matcher ,n kinds data suffixes)))
+                                collect `(,n (values
+                                              (unrolled-args-matcher ,n kinds data suffixes)
+                                              (positional-args-matcher ,n kinds data))))
                         (t
                          (lambda (m frame args)
                            (declare (type simple-vector frame) (optimize (safety 0)))
@@ -308,22 +336,37 @@ variables have values, or NIL when PATTERNS is not of that form."
                  (setf (aref kinds i) kind (svref data i) datum)))
       (values kinds data))))
 
-(defmacro with-unrolled-build ((n kinds data frame args-var) &body body)
-  "BODY with ARGS-VAR bound to the list of the N elements built from KINDS and DATA, in a
-LAMBDA (M FRAME CONT BARRIER) built around BODY."
+(defun classify-call-args (patterns)
+  "Kinds and data vectors of BUILD-ELEMENT for the argument list PATTERNS of a call when it is
+a proper list of 1 to 4 elements (a variable's first occurrence makes it), or NIL."
+  (when (and (alexandria:proper-list-p patterns) (<= 1 (length patterns) 4))
+    (let* ((k (length patterns))
+           (kinds (make-array k :element-type 'fixnum))
+           (data (make-array k)))
+      (loop for p in patterns
+            for i from 0
+            do (multiple-value-bind (kind datum) (classify-build-element p)
+                 (setf (aref kinds i) kind (svref data i) datum)))
+      (values kinds data))))
+
+(defmacro positional-call (n pred kinds data)
+  "A goal function (M FRAME CONT BARRIER) calling PRED's entry for N arguments passed one by
+one with the N elements built from KINDS and DATA."
   (let ((ks (loop repeat n collect (gensym "K")))
-        (ds (loop repeat n collect (gensym "D"))))
+        (ds (loop repeat n collect (gensym "D")))
+        (as (loop repeat n collect (gensym "A")))
+        (entry (ecase n (1 'pred-entry1) (2 'pred-entry2) (3 'pred-entry3) (4 'pred-entry4))))
     `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
            ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
        (declare (type fixnum ,@ks))
        (with-constant-kinds ,(if (<= n 3)
                                  (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
                                  '())
-         (lambda (m ,frame cont barrier)
-           (declare (type simple-vector ,frame) (ignorable barrier) (optimize (safety 0)))
-           (let ((,args-var (list ,@(loop for k in ks for d in ds
-                                           collect `(build-element ,k ,d ,frame)))))
-             ,@body))))))
+         (lambda (m frame cont barrier)
+           (declare (type simple-vector frame) (ignore barrier) (optimize (safety 0)))
+           (let* (,@(loop for k in ks for d in ds for a in as
+                          collect `(,a (build-element ,k ,d frame))))
+             (funcall (,entry ,pred) m ,@as cont)))))))
 
 (defun compile-args-build (patterns)
   "Like COMPILE-BUILD for a whole argument list PATTERNS, all of whose variables have values."
@@ -352,8 +395,8 @@ is a symbol, got ~s." clause)))
         (*nvars* 0)
         (*seen* '()))
     (destructuring-bind (head . body) clause
-      (let* ((match (compile-args-match (cdr head)))
-             (nhead *nvars*)
+      (multiple-value-bind (match match-n) (compile-args-match (cdr head))
+       (let* ((nhead *nvars*)
              (init (loop for v in (term-vars body)
                          unless (member v *seen* :test #'eq)
                            collect (prog1 (cons (var-index v) v) (push v *seen*))))
@@ -363,7 +406,9 @@ is a symbol, got ~s." clause)))
         (make-clause :kind (cond ((source-var-p first) 0) ((consp first) 2) (t 1))
                      :key (if (or (source-var-p first) (consp first)) nil first)
                      :nvars *nvars* :nhead nhead :frameless frameless :match match :init init :body body-fn
-                     :source clause)))))
+                     :arity (if (alexandria:proper-list-p (cdr head)) (length (cdr head)) -1)
+                     :match-n match-n
+                     :source clause))))))
 
 (defun plain-call-p (goal)
   "True when the source GOAL compiles to a call of a predicate (not a control construct): its
@@ -401,204 +446,15 @@ be a symbol (write (call ~s ...) to call a goal held in a variable)."
          (let ((pred (resolve-functor (car goal))))
            (if (pred-control pred)
                (funcall (the function (pred-control pred)) (cdr goal))
-               (multiple-value-bind (kinds data) (classify-args-build (cdr goal))
+               (multiple-value-bind (kinds data) (classify-call-args (cdr goal))
                  (macrolet ((by-arity ()
                               `(case (length kinds)
-                                 ,@(loop for n in *unrolled-arities*
-                                         collect `(,n (with-unrolled-build
-                                                          (,n kinds data frame args)
-                                                        (funcall (pred-entry pred) m args
-                                                                 cont))))
-                                 (t (general)))))
-                   (flet ((general ()
-                            (let ((build (compile-args-build (cdr goal))))
-                              (declare (type function build))
-                              (lambda (m frame cont barrier)
-                                (declare (ignore barrier))
-                                (funcall (pred-entry pred) m (funcall build frame) cont)))))
-                     (if kinds (by-arity) (general))))))))))
-
-;;; Running clauses
-;;;
-;;; A predicate's entry selects, from the dereferenced first argument of the call, the list of
-;;; clauses that can match it (all of them when it is unbound; the clauses with a variable or a
-;;; compound first argument for a compound; for an atom the clauses with that key or a variable
-;;; first argument, in their order). Every clause of a selected list is then tried in turn, with
-;;; no further filtering.
-
-(declaim (inline first-arg-of))
-(defun first-arg-of (args)
-  "The dereferenced first argument of the run-time argument list ARGS, or +UNBOUND+ when unknown."
-  (let ((args (deref args)))
-    (if (consp args)
-        (let ((a (deref (car args))))
-          (if (pvar-p a) +unbound+ a))
-        +unbound+)))
-
-(defvar +empty-frame+ (vector))
-
-(defun grow-scratch (m n)
-  (declare (type machine m) (type fixnum n))
-  (setf (machine-scratch m) (make-array (max n (* 2 (length (machine-scratch m)))))))
-
-(declaim (inline match-head))
-(defun match-head (m clause args)
-  "Match CLAUSE's head with ARGS; the frame holding the head's variables, or NIL on failure. A
-clause with variables is matched in M's scratch frame."
-  (declare (type clause clause) (type machine m))
-  (let ((n (clause-nvars clause)))
-    (declare (type fixnum n))
-    (if (zerop n)
-        (and (funcall (clause-match clause) m +empty-frame+ args) +empty-frame+)
-        (let ((scratch (machine-scratch m)))
-          (when (< (length scratch) n)
-            (setf scratch (grow-scratch m n)))
-          (and (funcall (clause-match clause) m scratch args) scratch)))))
-
-(declaim (inline enter-body))
-(defun enter-body (m clause head-frame cont barrier)
-  "Run the body of CLAUSE (or CONT for a fact) after its head matched into HEAD-FRAME."
-  (declare (type clause clause) (type simple-vector head-frame))
-  (let ((body (clause-body clause))
-        (n (clause-nvars clause)))
-    (declare (type fixnum n))
-    (cond ((null body) (funcall (the function cont)))
-          ((zerop n) (funcall (the function body) m +empty-frame+ cont barrier))
-          ((clause-frameless clause)
-           ;; the single goal builds its arguments from the head frame before anything else
-           ;; uses it, so the scratch frame serves
-           (loop for (i . name) in (clause-init clause)
-                 do (setf (svref head-frame i) (make-pvar name)))
-           (funcall (the function body) m head-frame cont barrier))
-          (t (let ((frame (make-array n)))
-               (dotimes (i (clause-nhead clause))
-                 (setf (svref frame i) (svref head-frame i)))
-               (loop for (i . name) in (clause-init clause)
-                     do (setf (svref frame i) (make-pvar name)))
-               (funcall (the function body) m frame cont barrier))))))
-
-(declaim (inline run-clause))
-(defun run-clause (m clause args cont barrier)
-  "Match CLAUSE's head with ARGS, then run its body (or CONT for a fact)."
-  (let ((frame (match-head m clause args)))
-    (when frame
-      (enter-body m clause frame cont barrier))))
-
-(defun resume-clauses (m index clauses)
-  "Try CLAUSES in turn under the choice point at INDEX (the newest), which holds the call's
-arguments and continuation: a clause whose head does not match is skipped at once; the choice
-point is dropped before the last clause."
-  (declare (type machine m) (type fixnum index) (optimize (safety 0)))
-  (let ((args (cp-data m index 1))
-        (cont (cp-data m index 2)))
-    (loop
-      (let ((clause (car clauses))
-            (rest (cdr clauses)))
-        (when (null rest)
-          (setf (machine-cp-top m) index)
-          (return (run-clause m clause args cont index)))
-        (setf (cp-data m index 0) rest)
-        (let ((frame (match-head m clause args)))
-          (when frame
-            (return (enter-body m clause frame cont index)))
-          (undo-trail m (svref (machine-cps m) index))
-          (setf clauses rest))))))
-
-(defun retry-clauses (m index)
-  "Choice point of TRY-CLAUSES: try the clauses left in data slot 0."
-  (resume-clauses m index (cp-data m index 0)))
-
-(declaim (inline try-clauses))
-(defun try-clauses (m clauses args cont)
-  "Run each of the CLAUSES (a non-empty list) in turn, leaving a choice point for the rest."
-  (count-step m)
-  (if (cdr clauses)
-      (resume-clauses m (push-cp m #'retry-clauses clauses args cont) clauses)
-      (run-clause m (car clauses) args cont (machine-cp-top m))))
-
-(declaim (inline eq-key-p))
-(defun eq-key-p (x)
-  "True for the atoms that EQUAL compares like EQ."
-  (typep x '(or symbol fixnum character)))
-
-(declaim (inline eq-key-hash))
-(defun eq-key-hash (x)
-  (declare (type (or symbol fixnum character) x))
-  (typecase x
-    (symbol (sxhash x))
-    (fixnum (logand x most-positive-fixnum))
-    (t (char-code x))))
-
-(defun make-key-lookup (keys buckets default)
-  "A function of a run-time atom returning the bucket of the key EQUAL to it, or DEFAULT. KEYS
-and BUCKETS are parallel lists, the keys distinct under EQUAL."
-  (let ((n (length keys)))
-    (cond ((zerop n) (lambda (a) (declare (ignore a)) default))
-          ((and (every #'eq-key-p keys) (<= n 6))
-           (let ((kv (coerce keys 'simple-vector))
-                 (bv (coerce buckets 'simple-vector)))
-             (lambda (a)
-               (dotimes (i n default)
-                 (when (eq (svref kv i) a) (return (svref bv i)))))))
-          ((every #'eq-key-p keys)
-           ;; open addressing over a power-of-two table at most half full
-           (let* ((size (ash 1 (integer-length (* 2 n))))
-                  (mask (1- size))
-                  (empty (make-symbol "EMPTY"))
-                  (kv (make-array size :initial-element empty))
-                  (bv (make-array size :initial-element default)))
-             (declare (type fixnum mask))
-             (loop for k in keys
-                   for b in buckets
-                   do (let ((i (logand (eq-key-hash k) mask)))
-                        (declare (type fixnum i))
-                        (loop until (eq (svref kv i) empty)
-                              do (setf i (logand (1+ i) mask)))
-                        (setf (svref kv i) k (svref bv i) b)))
-             (lambda (a)
-               (if (eq-key-p a)
-                   (let ((i (logand (the fixnum (eq-key-hash a)) mask)))
-                     (declare (type fixnum i))
-                     (loop
-                       (let ((k (svref kv i)))
-                         (cond ((eq k a) (return (svref bv i)))
-                               ((eq k empty) (return default)))
-                         (setf i (logand (1+ i) mask)))))
-                   default))))
-          (t (let ((table (make-hash-table :test 'equal :size n)))
-               (loop for k in keys
-                     for b in buckets
-                     do (setf (gethash k table) b))
-               (lambda (a) (values (gethash a table default))))))))
-
-(defun make-clauses-entry (clauses)
-  "The entry function running CLAUSES, selecting them by the first argument of the call."
-  (let ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
-        (cons-clauses (remove 1 clauses :key #'clause-kind)))
-    (if (every (lambda (c) (= 0 (clause-kind c))) clauses)
-        (lambda (m args cont)
-          (declare (optimize (safety 0)))
-          (try-clauses m clauses args cont))
-        ;; bucket per atom key: the clauses with that key or a variable first argument
-        (let ((table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
-          (dolist (c clauses)
-            (case (clause-kind c)
-              (0 (push c vars-so-far)
-               (maphash (lambda (k bucket) (setf (gethash k table) (cons c bucket))) table))
-              (1 (let ((bucket (gethash (clause-key c) table :none)))
-                   (when (eq bucket :none)
-                     (push (clause-key c) keys))
-                   (setf (gethash (clause-key c) table)
-                         (cons c (if (eq bucket :none) vars-so-far bucket)))))))
-          (setf keys (nreverse keys))
-          (let ((lookup (make-key-lookup keys (mapcar (lambda (k) (reverse (gethash k table))) keys)
-                                        var-clauses)))
-            (declare (type function lookup))
-            (lambda (m args cont)
-              (declare (optimize (safety 0)))
-              (let* ((a (first-arg-of args))
-                     (selected (cond ((eq a +unbound+) clauses)
-                                     ((consp a) cons-clauses)
-                                     (t (funcall lookup a)))))
-                (when selected
-                  (try-clauses m selected args cont)))))))))
+                                 ,@(loop for n in '(1 2 3 4)
+                                         collect `(,n (positional-call ,n pred kinds data))))))
+                   (if kinds
+                       (by-arity)
+                       (let ((build (compile-args-build (cdr goal))))
+                         (declare (type function build))
+                         (lambda (m frame cont barrier)
+                           (declare (ignore barrier))
+                           (funcall (pred-entry pred) m (funcall build frame) cont)))))))))))

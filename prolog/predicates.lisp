@@ -38,10 +38,17 @@ something: assert, retract, simulate) are always signalled.")
   "Everything known about the predicate named FUNCTOR."
   (functor nil :type symbol)
   (entry #'identity :type function)     ; (lambda (m args cont)) → true on a solution
+  ;; (lambda (m a1 ... an cont)): the same for a call with N = 1 .. 4 arguments passed one by
+  ;; one, so that a call need not cons its argument list
+  (entry1 #'identity :type function)
+  (entry2 #'identity :type function)
+  (entry3 #'identity :type function)
+  (entry4 #'identity :type function)
   (sources '())                         ; ((group-name . clauses) ...) in registration order
   (dynamic '())                         ; facts added with ADD-FACT, in order
   (handler nil)                         ; (lambda (bindings &rest args)) → lazy list of alists
   (native nil)                          ; (lambda (m args cont)) for built-ins
+  (native-positional nil)               ; NIL or (n . (lambda (m a1 ... an cont))) for built-ins
   (control nil)                         ; compiler of a control construct: (lambda (args)) → goal
   (warned nil))
 
@@ -54,13 +61,51 @@ something: assert, retract, simulate) are always signalled.")
     (install-entry pred)
     (funcall (pred-entry pred) m args cont)))
 
+(defun make-lazy-positional-entry (pred)
+  "An entry (M A1 ... AN CONT), N from 1 to 4, that installs PRED's real entries on first
+call, then calls the one for N arguments."
+  (lambda (m &rest args-and-cont)
+    (install-entry pred)
+    (apply (the function (positional-entry pred (1- (length args-and-cont)))) m args-and-cont)))
+
+(defun positional-entry (pred n)
+  "PRED's entry for calls with N arguments passed one by one."
+  (ecase n
+    (1 (pred-entry1 pred)) (2 (pred-entry2 pred)) (3 (pred-entry3 pred)) (4 (pred-entry4 pred))))
+
+(defun set-positional-entries (pred function)
+  "Make (FUNCTION n) PRED's entry for calls with N arguments passed one by one, N from 1 to 4."
+  (declare (type function function))
+  (setf (pred-entry1 pred) (funcall function 1)
+        (pred-entry2 pred) (funcall function 2)
+        (pred-entry3 pred) (funcall function 3)
+        (pred-entry4 pred) (funcall function 4)))
+
+(defun set-lazy-entries (pred)
+  (setf (pred-entry pred) (make-lazy-entry pred))
+  (let ((lazy (make-lazy-positional-entry pred)))
+    (set-positional-entries pred (lambda (n) (declare (ignore n)) lazy))))
+
+(defmacro listing-entry (n entry)
+  "An entry (M A1 ... AN CONT) calling the entry function ENTRY (a form evaluated at each call)
+with the argument list."
+  (let ((as (loop for i from 1 to n collect (gensym "A"))))
+    `(lambda (m ,@as cont) (funcall (the function ,entry) m (list ,@as) cont))))
+
+(defun listing-entries (pred)
+  "Entries for 1 to 4 arguments passed one by one that call PRED's current entry with the list."
+  (lambda (n)
+    (ecase n
+      (1 (listing-entry 1 (pred-entry pred))) (2 (listing-entry 2 (pred-entry pred)))
+      (3 (listing-entry 3 (pred-entry pred))) (4 (listing-entry 4 (pred-entry pred))))))
+
 (defun ensure-pred (functor)
   "The PRED of FUNCTOR, created when new."
   (or (gethash functor *predicates*)
       (with-database-lock ()
         (or (gethash functor *predicates*)
             (let ((pred (%make-pred functor)))
-              (setf (pred-entry pred) (make-lazy-entry pred))
+              (set-lazy-entries pred)
               (setf (gethash functor *predicates*) pred))))))
 
 (defun pred-defined-p (pred)
@@ -92,7 +137,7 @@ query over facts returned stays valid while it is the same."
 (defun invalidate-pred (pred)
   "Make PRED recompile on its next call (and count a change of the database)."
   (sb-ext:atomic-incf (car *generation*))
-  (setf (pred-entry pred) (make-lazy-entry pred)))
+  (set-lazy-entries pred))
 
 (defun undefined-entry (pred)
   (lambda (m args cont)
@@ -104,23 +149,32 @@ query over facts returned stays valid while it is the same."
     nil))
 
 (defun install-entry (pred)
-  "Compute and store PRED's entry from its current definition."
+  "Compute and store PRED's entries from its current definition."
   (with-database-lock ()
-    (setf (pred-entry pred)
-          (cond ((pred-native pred) (pred-native pred))
-                ((pred-control pred) (control-entry pred))
-                (t
-                 (let* ((clauses (loop for (nil . forms) in (pred-sources pred)
-                                       append (mapcar #'compile-clause forms)))
-                        (clauses (append clauses
-                                         (mapcar #'compile-clause (pred-dynamic pred))))
-                        (clause-entry (if clauses
-                                          (make-clauses-entry clauses)
-                                          (undefined-entry pred))))
+    (cond ((or (pred-native pred) (pred-control pred))
+           (setf (pred-entry pred) (or (pred-native pred) (control-entry pred)))
+           (let ((positional (and (pred-native pred) (pred-native-positional pred))))
+             (set-positional-entries
+              pred (lambda (n)
+                     (if (and positional (= n (the fixnum (car positional))))
+                         (cdr positional)
+                         (funcall (the function (listing-entries pred)) n))))))
+          (t
+           (let* ((clauses (loop for (nil . forms) in (pred-sources pred)
+                                 append (mapcar #'compile-clause forms)))
+                  (clauses (append clauses (mapcar #'compile-clause (pred-dynamic pred))))
+                  (clause-entry (if clauses
+                                    (make-clauses-entry clauses)
+                                    (undefined-entry pred))))
+             (setf (pred-entry pred)
                    (if (pred-handler pred)
-                       (make-handler-entry pred (pred-handler pred)
-                                           (and clauses clause-entry))
-                       clause-entry)))))))
+                       (make-handler-entry pred (pred-handler pred) (and clauses clause-entry))
+                       clause-entry))
+             (set-positional-entries
+              pred (lambda (n)
+                     (or (and clauses (not (pred-handler pred))
+                              (make-positional-clauses-entry clauses n))
+                         (funcall (the function (listing-entries pred)) n)))))))))
 
 (defun control-entry (pred)
   "Entry of a control construct called through CALL or a query: compile the goal and run it."

@@ -61,7 +61,10 @@ abandoned; the image is unharmed."
 (defmacro with-storage-guard (() &body body)
   "Run BODY; running out of Lisp stack or heap inside it signals PROLOG-RESOURCE-ERROR (after
 unwinding BODY and collecting what it held)."
-  `(call-with-storage-guard (lambda () ,@body)))
+  (let ((thunk (gensym "GUARDED")))
+    `(flet ((,thunk () ,@body))
+       (declare (dynamic-extent #',thunk))
+       (call-with-storage-guard #',thunk))))
 
 (defun prolog (goal &optional bindings)
   "Prove GOAL (a term; ?symbols are variables) and return the lazy list of its solutions: binding

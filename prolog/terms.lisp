@@ -37,8 +37,9 @@
         do (setf term (pvar-value term)))
   term)
 
-(defconstant +cp-size+ 5
-  "Slots per choice point: trail height, resume function, three data slots.")
+(defconstant +cp-size+ 8
+  "Slots per choice point: trail height, resume function, six data slots (three of them used by
+the clause choice points of calls with up to four arguments passed one by one).")
 
 (defstruct (machine (:constructor %make-machine))
   "The state of one running query: trail and choice-point stack."
@@ -176,6 +177,7 @@ garbage collection."
             (machine-trail-top m) (1+ top))))
   t)
 
+(declaim (inline undo-trail))
 (defun undo-trail (m mark)
   "Unbind every variable trailed after MARK."
   (declare (type machine m) (type fixnum mark))
@@ -185,8 +187,9 @@ garbage collection."
     (setf (machine-trail-top m) mark)))
 
 (declaim (inline push-cp))
-(defun push-cp (m function a b c)
-  "Push a choice point resuming with (FUNCTION M INDEX) where slots A B C hold its data."
+(defun push-cp (m function a b c &optional (d nil d-p) (e nil e-p) (f nil f-p))
+  "Push a choice point resuming with (FUNCTION M INDEX) where data slots 0 to 2 hold A B C, and
+slots 3 to 5 D E F when given."
   (declare (type machine m))
   (let ((top (machine-cp-top m))
         (cps (machine-cps m)))
@@ -200,6 +203,9 @@ garbage collection."
           (svref cps (+ top 3)) b
           (svref cps (+ top 4)) c
           (machine-cp-top m) (+ top +cp-size+))
+    (when d-p (setf (svref cps (+ top 5)) d))
+    (when e-p (setf (svref cps (+ top 6)) e))
+    (when f-p (setf (svref cps (+ top 7)) f))
     top))
 
 (declaim (inline cut-to))
