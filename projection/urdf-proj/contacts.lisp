@@ -39,12 +39,30 @@ the contacts motions are meant to make."
   (loop for arm in (ignore-errors (robot-arms))
         append (ignore-errors (hand-links arm robot))))
 
+(defvar *last-intended-contacts* nil
+  "(key . pairs): the last answer of INTENDED-CONTACTS and what it was made of.")
+
 (defun intended-contacts (robot)
   "The (MOVING HIT) pairs ROBOT's motion is meant to make now: *SWEEP-ALLOWED-CONTACTS*, each hand
 link with each of *GRASPED-OBJECTS* and with each of *GRASP-CONTAINER-LINKS* of the environment,
-and each of *PLACED-OBJECTS* with anything."
-  (let ((hands (and (or *grasped-objects* *grasp-container-links*) (all-hand-links robot)))
-        (environment (and *grasp-container-links* (btr:get-environment-object (btr:world robot)))))
+and each of *PLACED-OBJECTS* with anything. The last answer is kept while it is made of the
+same lists, robot, environment and facts (not to be modified)."
+  (let ((environment (and *grasp-container-links* (btr:get-environment-object (btr:world robot))))
+        (last *last-intended-contacts*))
+    (destructuring-bind (&optional r e g sweep grasped containers placed) (car last)
+      (if (and last (eq r robot) (eq e environment) (eql g (prolog:database-generation))
+               (eq sweep *sweep-allowed-contacts*) (eq grasped *grasped-objects*)
+               (eq containers *grasp-container-links*) (eq placed *placed-objects*))
+          (cdr last)
+          (let ((pairs (make-intended-contacts robot environment)))
+            (setf *last-intended-contacts*
+                  (cons (list robot environment (prolog:database-generation) *sweep-allowed-contacts*
+                              *grasped-objects* *grasp-container-links* *placed-objects*)
+                        pairs))
+            pairs)))))
+
+(defun make-intended-contacts (robot environment)
+  (let ((hands (and (or *grasped-objects* *grasp-container-links*) (all-hand-links robot))))
     (append *sweep-allowed-contacts*
             (loop for object in *grasped-objects*
                   append (loop for link in hands collect (list link object)))

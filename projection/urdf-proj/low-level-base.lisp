@@ -74,7 +74,7 @@ objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do 
 The last answer is kept while the objects it names are the same: a motion's checks ask with
 the same pairs again and again."
   (destructuring-bind (&optional w r i triples objects) *last-allowed-triples*
-    (if (and (eq w world) (eq r robot) (equal i intended)
+    (if (and (eq w world) (eq r robot) (or (eq i intended) (equal i intended))
              (loop for (name . handle) in objects
                    always (let ((o (btr:object world name)))
                             (and o (eql (btr:object-handle o) handle)))))

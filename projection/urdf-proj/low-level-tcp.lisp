@@ -56,9 +56,13 @@ for the robot's current base pose and torso, or NIL. Quick distance check before
   "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
 the child link of the chain's first joint FIRST-CHILD."
   (let* ((base-pose (btr:link-pose robot (ik-chain-base-link chain)))
-         ;; the chain ends at the wrist; the end-effector link hangs below it
-         (tip-in-ee (relative-transform (btr:link-pose robot ee) (btr:link-pose robot (ik-chain-tip-link chain))))
-         (tip-goal (cl-transforms:transform* (cl-transforms:pose->transform ee-map-pose) tip-in-ee))
+         ;; the chain ends at the wrist; the end-effector link is the wrist or hangs below it
+         (tip (ik-chain-tip-link chain))
+         (tip-goal (if (string= ee tip)
+                       (cl-transforms:pose->transform ee-map-pose)
+                       (cl-transforms:transform* (cl-transforms:pose->transform ee-map-pose)
+                                                 (relative-transform (btr:link-pose robot ee)
+                                                                     (btr:link-pose robot tip)))))
          (goal (cl-transforms:transform->pose
                 (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
                                           tip-goal)))
