@@ -340,20 +340,31 @@ once and cached until another function is registered."
   (cumulative #() :type (simple-array double-float (*)))
   (total 0d0 :type double-float))
 
+(defun positive-cells (grid region)
+  "How many cells of GRID within REGION (row-0 row-1 col-0 col-1) are above 0."
+  (declare (type (simple-array double-float (* *)) grid) (optimize speed))
+  (destructuring-bind (r0 r1 c0 c1) region
+    (declare (type fixnum r0 r1 c0 c1))
+    (let ((n 0))
+      (declare (type fixnum n))
+      (loop for r of-type fixnum from r0 below r1
+            do (loop for c of-type fixnum from c0 below c1
+                     when (> (aref grid r c) 0d0) do (incf n)))
+      n)))
+
 (defun costmap-distribution (costmap)
   (or (%distribution costmap)
       (let* ((m (cost-grid costmap))
              (cols (costmap-columns costmap))
              (region (%region costmap))
-             (count (destructuring-bind (r0 r1 c0 c1) region
-                      (loop for r from r0 below r1
-                            sum (loop for c from c0 below c1 count (> (aref m r c) 0d0)))))
+             (count (positive-cells m region))
              (cells (make-array count :element-type 'fixnum))
              (cumulative (make-array count :element-type 'double-float))
              (sum 0d0) (k 0))
-        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k cols))
+        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k cols)
+                 (type (simple-array fixnum (*)) cells) (type (simple-array double-float (*)) cumulative))
         (destructuring-bind (r0 r1 c0 c1) region
-          (declare (type fixnum r0 r1 c0 c1))
+          (declare (type fixnum r0 r1 c0 c1) (optimize speed))
           (loop for r of-type fixnum from r0 below r1
                 do (loop for c of-type fixnum from c0 below c1
                          do (let ((v (aref m r c)))
