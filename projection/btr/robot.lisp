@@ -70,7 +70,11 @@
 (defun joint-limits (robot joint)
   "(values lower upper) of JOINT of ROBOT; continuous joints give -pi, pi... as unbounded ±inf
 is not meaningful here, they return (values nil nil)."
-  (let ((info (aref (km-joint-info (%model robot)) (joint-index robot joint))))
+  (indexed-joint-limits robot (joint-index robot joint)))
+
+(defun indexed-joint-limits (robot index)
+  "JOINT-LIMITS of ROBOT's joint number INDEX."
+  (let ((info (aref (km-joint-info (%model robot)) index)))
     (if (member (getf info :type) '(:revolute :prismatic))
         (values (getf info :lower) (getf info :upper))
         (values nil nil))))
@@ -78,10 +82,13 @@ is not meaningful here, they return (values nil nil)."
 (defun joint-lower-limit (robot joint) "Lower limit of JOINT." (nth-value 0 (joint-limits robot joint)))
 (defun joint-upper-limit (robot joint) "Upper limit of JOINT." (nth-value 1 (joint-limits robot joint)))
 
-(defun clamp-to-joint-limits (robot joint value)
-  "VALUE (a double float) of JOINT of ROBOT, clamped into the joint's limits with a warning
-when it lies beyond them by more than 1e-6 (as CRAM does); joints without limits keep it."
-  (multiple-value-bind (lower upper) (ignore-errors (joint-limits robot joint))
+(defun clamp-to-joint-limits (robot joint value &optional index)
+  "VALUE (a double float) of JOINT of ROBOT (its number INDEX, when known), clamped into the
+joint's limits with a warning when it lies beyond them by more than 1e-6 (as CRAM does);
+joints without limits keep it."
+  (multiple-value-bind (lower upper) (if index
+                                         (indexed-joint-limits robot index)
+                                         (ignore-errors (joint-limits robot joint)))
     (if (and (realp lower) (realp upper) (< lower upper)
              (or (< value lower) (> value upper)))
         (let ((clamped (to-double (max lower (min upper value)))))
@@ -109,8 +116,9 @@ table name → value. All joints are set at once, then links and attached object
             do (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
                (unless (and (finite-real-p v) (< (abs v) 1d6))
                  (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
-               (setf (aref indices i) (joint-index robot n)
-                     (aref values i) (clamp-to-joint-limits robot n (to-double v))))
+               (let ((index (joint-index robot n)))
+                 (setf (aref indices i) index
+                       (aref values i) (clamp-to-joint-limits robot n (to-double v) index))))
       (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
       robot)))
 

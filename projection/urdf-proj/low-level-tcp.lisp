@@ -213,6 +213,10 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
          (state0 (btr:joint-states robot))
+         ;; what a candidate changes besides the torso, which each candidate sets itself
+         (arms0 (loop for (nil nil chain) in ee-goals
+                      append (map 'list (lambda (j) (list j (btr:joint-state robot j)))
+                                  (ik-chain-joint-names chain))))
          (sweep-start (and *sweep-check* (robot-state-vectors robot)))
          (goal-checked (not (member collision-mode '(nil :avoid-all))))
          (swept nil))
@@ -238,7 +242,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                   (let ((hopeless (and (not clear) (not goal-checked)
                                        (setf goal-checked t)
                                        (goal-bound-collision-p (mapcar #'third ee-goals) robot))))
-                    (btr:set-robot-state-from-joints state0 robot)
+                    (btr:set-robot-state-from-joints arms0 robot)
                     (when hopeless (return-from candidates)))))))))
       (setf (btr:pose robot) base0)
       (btr:set-robot-state-from-joints state0 robot)
