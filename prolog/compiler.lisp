@@ -262,22 +262,31 @@ stored in the frame). Updates *SEEN* like COMPILE-BUILD."
              (let ((a (deref a)))
                (or (null a) (and (pvar-p a) (bind-var m a nil)))))))))))
 
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun elements-form (ks ds kinds data lambda-form)
+    "LAMBDA-FORM with the variables KS bound to the elements of the kind vector KINDS and DS to
+those of the data vector DATA, and (for up to 3 elements) the first two kinds made constants
+where they are common (WITH-CONSTANT-KINDS)."
+    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
+           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
+       (declare (type fixnum ,@ks))
+       (with-constant-kinds ,(if (<= (length ks) 3)
+                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
+                                 '())
+         ,lambda-form))))
+
 (defmacro positional-args-matcher (n kinds data)
   "A matcher (M FRAME A1 ... AN) of N arguments passed one by one, from the classified elements
 in the vectors KINDS and DATA."
   (let ((ks (loop repeat n collect (gensym "K")))
         (ds (loop repeat n collect (gensym "D")))
         (as (loop repeat n collect (gensym "A"))))
-    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
-           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
-       (declare (type fixnum ,@ks))
-       (with-constant-kinds ,(if (<= n 3)
-                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
-                                 '())
-         (lambda (m frame ,@as)
-           (declare (type simple-vector frame) (optimize (safety 0)))
-           (and ,@(loop for k in ks for d in ds for a in as
-                        collect `(match-element ,k ,d m frame ,a))))))))
+    (elements-form ks ds kinds data
+                   `(lambda (m frame ,@as)
+                      (declare (type simple-vector frame) (optimize (safety 0)))
+                      (and ,@(loop for k in ks for d in ds for a in as
+                                   collect `(match-element ,k ,d m frame ,a)))))))
+
 
 (defun compile-args-match (patterns)
   "Like COMPILE-MATCH for a whole argument list PATTERNS. For a proper list of 1 to 4
@@ -327,27 +336,24 @@ variables have values, or NIL when PATTERNS is not of that form."
   (unless (or (not (alexandria:proper-list-p patterns)) (null patterns)
               (not (has-source-vars-p patterns))
               (some (lambda (v) (not (member v *seen* :test #'eq))) (term-vars patterns)))
-    (let* ((k (length patterns))
-           (kinds (make-array k :element-type 'fixnum))
-           (data (make-array k)))
-      (loop for p in patterns
-            for i from 0
-            do (multiple-value-bind (kind datum) (classify-build-element p)
-                 (setf (aref kinds i) kind (svref data i) datum)))
-      (values kinds data))))
+    (classify-elements patterns)))
+
+(defun classify-elements (patterns)
+  "Kinds and data vectors of BUILD-ELEMENT for each of the proper list PATTERNS."
+  (let* ((k (length patterns))
+         (kinds (make-array k :element-type 'fixnum))
+         (data (make-array k)))
+    (loop for p in patterns
+          for i from 0
+          do (multiple-value-bind (kind datum) (classify-build-element p)
+               (setf (aref kinds i) kind (svref data i) datum)))
+    (values kinds data)))
 
 (defun classify-call-args (patterns)
   "Kinds and data vectors of BUILD-ELEMENT for the argument list PATTERNS of a call when it is
 a proper list of 1 to 4 elements (a variable's first occurrence makes it), or NIL."
   (when (and (alexandria:proper-list-p patterns) (<= 1 (length patterns) 4))
-    (let* ((k (length patterns))
-           (kinds (make-array k :element-type 'fixnum))
-           (data (make-array k)))
-      (loop for p in patterns
-            for i from 0
-            do (multiple-value-bind (kind datum) (classify-build-element p)
-                 (setf (aref kinds i) kind (svref data i) datum)))
-      (values kinds data))))
+    (classify-elements patterns)))
 
 (defmacro positional-call (n pred kinds data)
   "A goal function (M FRAME CONT BARRIER) calling PRED's entry for N arguments passed one by
@@ -356,17 +362,12 @@ one with the N elements built from KINDS and DATA."
         (ds (loop repeat n collect (gensym "D")))
         (as (loop repeat n collect (gensym "A")))
         (entry (ecase n (1 'pred-entry1) (2 'pred-entry2) (3 'pred-entry3) (4 'pred-entry4))))
-    `(let (,@(loop for k in ks for i from 0 collect `(,k (aref ,kinds ,i)))
-           ,@(loop for d in ds for i from 0 collect `(,d (svref ,data ,i))))
-       (declare (type fixnum ,@ks))
-       (with-constant-kinds ,(if (<= n 3)
-                                 (loop for k in ks repeat 2 collect `(,k (0 1 3 :runtime)))
-                                 '())
-         (lambda (m frame cont barrier)
-           (declare (type simple-vector frame) (ignore barrier) (optimize (safety 0)))
-           (let* (,@(loop for k in ks for d in ds for a in as
-                          collect `(,a (build-element ,k ,d frame))))
-             (funcall (,entry ,pred) m ,@as cont)))))))
+    (elements-form ks ds kinds data
+                   `(lambda (m frame cont barrier)
+                      (declare (type simple-vector frame) (ignore barrier) (optimize (safety 0)))
+                      (let* (,@(loop for k in ks for d in ds for a in as
+                                     collect `(,a (build-element ,k ,d frame))))
+                        (funcall (,entry ,pred) m ,@as cont))))))
 
 (defun compile-args-build (patterns)
   "Like COMPILE-BUILD for a whole argument list PATTERNS, all of whose variables have values."
