@@ -8,6 +8,11 @@
   "Seconds WITH-REAL-ROBOT waits for the first /joint_states and TF of the robot, and a command
 publisher for its controller to connect.")
 
+(defvar *subscribe-timeout* 30
+  "Seconds a subscription may take. Subscribing to a topic nobody publishes returns at once;
+it takes long only while a publisher is slow to answer (a robot's node still starting on a
+loaded machine), so the wait is longer than *CONNECT-TIMEOUT*.")
+
 (defvar *silence-timeout* 3
   "Seconds /joint_states (or the action status of move_base) may stay silent while a motion
 waits before ROBOT-CONNECTION-ERROR.")
@@ -180,7 +185,7 @@ the node and feed *LIVE-CONNECTION*.")
 thread for the topic)."
   (unless (subscription-live-p topic)
     (setf (gethash topic *subscriptions*)
-          (or (call-with-deadline *connect-timeout* topic "subscribing"
+          (or (call-with-deadline *subscribe-timeout* topic "subscribing"
                                   (lambda () (roslisp:subscribe topic type callback :max-queue-length queue)))
               (connection-fail topic "roslisp could not subscribe (type ~a)." type))))
   (gethash topic *subscriptions*))
