@@ -8,10 +8,15 @@
   "Seconds WITH-REAL-ROBOT waits for the first /joint_states and TF of the robot, and a command
 publisher for its controller to connect.")
 
-(defvar *subscribe-timeout* 30
+(defvar *subscribe-timeout* 60
   "Seconds a subscription may take. Subscribing to a topic nobody publishes returns at once;
 it takes long only while a publisher is slow to answer (a robot's node still starting on a
 loaded machine), so the wait is longer than *CONNECT-TIMEOUT*.")
+
+(defvar *handshake-timeout* 15
+  "Seconds roslisp waits for a publisher's answer to a new subscription's handshake (its
+ROSLISP::*TCP-TIMEOUT*, 5 s by default, is bound to this while subscribing): a node that is
+still starting on a loaded machine may take longer.")
 
 (defvar *silence-timeout* 3
   "Seconds /joint_states (or the action status of move_base) may stay silent while a motion
@@ -186,7 +191,9 @@ thread for the topic)."
   (unless (subscription-live-p topic)
     (setf (gethash topic *subscriptions*)
           (or (call-with-deadline *subscribe-timeout* topic "subscribing"
-                                  (lambda () (roslisp:subscribe topic type callback :max-queue-length queue)))
+                                  (lambda ()
+                                    (let ((roslisp::*tcp-timeout* (max roslisp::*tcp-timeout* *handshake-timeout*)))
+                                      (roslisp:subscribe topic type callback :max-queue-length queue))))
               (connection-fail topic "roslisp could not subscribe (type ~a)." type))))
   (gethash topic *subscriptions*))
 
