@@ -2,16 +2,17 @@
 
 (in-package :cram-bullet-reasoning)
 
-(defun contact-records (world &optional object except)
+(defun contact-records (world &optional object except (threshold 0d0))
   "Contacts of WORLD (or of OBJECT only, leaving out those with the objects of EXCEPT) as
-\(object-a link-a object-b link-b) with objects and link names (NIL for plain bodies)."
+\(object-a link-a object-b link-b) with objects and link names (NIL for plain bodies): the
+pairs whose distance is at most THRESHOLD (0: touching; -0.01: reaching 1 cm into each other)."
   (check-world world 'contact-records)
   (let* ((w (world-handle world))
          (raw (if object
                   (with-live-object (object 'contacts)
-                    (native:object-contacts w (object-handle object)
+                    (native:object-contacts w (object-handle object) :threshold threshold
                                             :except (mapcar #'object-handle except)))
-                  (native:world-contacts w))))
+                  (native:world-contacts w :threshold threshold))))
     (loop for (ha la hb lb) in raw
           for a = (object-by-handle world ha)
           for b = (object-by-handle world hb)

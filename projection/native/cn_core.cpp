@@ -67,6 +67,11 @@ void check_ptr(const void *p, const char *what) {
   if (!p) fail(CN_E_ARG, "%s is a null pointer", what);
 }
 
+void check_output(int cap, const void *p, const char *what) {
+  if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
+  if (cap > 0) check_ptr(p, what);
+}
+
 double check_finite(double v, const char *what) {
   if (!std::isfinite(v)) fail(CN_E_ARG, "%s is %s, expected a finite number", what, num(v).c_str());
   return v;

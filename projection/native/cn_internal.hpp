@@ -98,6 +98,8 @@ bool fp_tame(const double *p, int n);
 
 // ---- argument checks -----------------------------------------------------------------------
 void check_ptr(const void *p, const char *what);
+// an output buffer of CAP elements at P: CAP >= 0, and P not null when CAP > 0
+void check_output(int cap, const void *p, const char *what);
 double check_finite(double v, const char *what);
 double check_positive(double v, const char *what);     // finite and > 0
 double check_nonneg(double v, const char *what);       // finite and >= 0

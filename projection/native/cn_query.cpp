@@ -40,11 +40,8 @@ static int write_pairs(PairList &pairs, int *out4, double *dist, int cap) {
 }
 
 static void check_out(int cap, const void *a, const void *b) {
-  if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-  if (cap > 0) {
-    check_ptr(a, "pair output");
-    check_ptr(b, "distance output");
-  }
+  check_output(cap, a, "pair output");
+  check_output(cap, b, "distance output");
 }
 
 // Whether object OB is one of the N objects of EXCEPT.
@@ -551,8 +548,7 @@ int cn_detach(int wh, int oh, int ph) {
 int cn_attachments(int wh, int *out4, int cap) {
   return guard([&] {
     World &w = world(wh);
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(out4, "attachment output");
+    check_output(cap, out4, "attachment output");
     int n = 0;
     for (auto &a : w.attachments) {
       if (n < cap) {
@@ -570,8 +566,7 @@ int cn_attachments(int wh, int *out4, int cap) {
 int cn_robot_link_aabbs(int wh, int r, double *out, int cap) {
   return guard([&] {
     Object &o = world(wh).robot(r);
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(out, "AABB output");
+    check_output(cap, out, "AABB output");
     int n = (int)o.link_rb.size();
     for (int l = 0; l < n && l < cap; ++l) {  // as cn_object_aabb gives each link's
       btVector3 lo, hi;

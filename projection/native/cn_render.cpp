@@ -480,8 +480,7 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
       fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
            (int)o.link_rb.size() - 1, oh);
     check_ptr(out_fraction, "fraction output");
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(occ, "occluder output");
+    check_output(cap, occ, "occluder output");
     if (std::isnan(min_z) || min_z == INFINITY)
       fail(CN_E_ARG, "min_z is %g, expected a height in metres or -inf", min_z);
     Camera cam = read_camera(cam7, convention, fov, width, height, 0.05, 50.0);

@@ -337,11 +337,8 @@ void check_common(World &w, const int *ignore4, int n_ignore, double max_step, d
   check_positive(max_step, "maximum step");
   check_positive(tol, "tolerance");
   if (flags & ~CN_SWEEP_SKIP_START_CONTACTS) fail(CN_E_ARG, "sweep flags %d, expected 0 or %d", flags, CN_SWEEP_SKIP_START_CONTACTS);
-  if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-  if (cap > 0) {
-    check_ptr(o4, "contact output");
-    check_ptr(od, "fraction and point output");
-  }
+  check_output(cap, o4, "contact output");
+  check_output(cap, od, "fraction and point output");
 }
 
 int write_hits(std::vector<Hit> &hits, int *out4, double *outd, int cap) {

@@ -541,8 +541,7 @@ int cn_robot_get_joint(int wh, int r, int joint, double *out) {
 int cn_robot_get_joints(int wh, int r, double *out, int cap) {
   return guard([&] {
     Object &o = world(wh).robot(r);
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(out, "joint output");
+    check_output(cap, out, "joint output");
     int n = (int)o.q.size();
     for (int i = 0; i < n && i < cap; ++i) out[i] = joint_value(*o.model, o.q, i);
     return n;
@@ -552,8 +551,7 @@ int cn_robot_get_joints(int wh, int r, double *out, int cap) {
 int cn_robot_link_poses(int wh, int r, double *out, int cap) {
   return guard([&] {
     Object &o = world(wh).robot(r);
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(out, "pose output");
+    check_output(cap, out, "pose output");
     int n = (int)o.link_pose.size();
     for (int i = 0; i < n && i < cap; ++i) write_pose(o.link_pose[i], out + 7 * i);
     return n;

@@ -601,8 +601,7 @@ int cn_object_get_color(int wh, int oh, int link, double *out) {
 int cn_robot_link_colors(int wh, int r, double *out, int cap) {
   return guard([&] {
     Object &o = world(wh).robot(r);
-    if (cap < 0) fail(CN_E_ARG, "capacity %d, expected >= 0", cap);
-    if (cap > 0) check_ptr(out, "colour output");
+    check_output(cap, out, "colour output");
     int n = (int)o.link_rgba.size();
     for (int l = 0; l < n && l < cap; ++l) {
       const float *c = link_color(o, l);

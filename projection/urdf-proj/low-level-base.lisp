@@ -50,19 +50,9 @@ objects being grasped, the objects being put down, *SWEEP-ALLOWED-CONTACTS*) do 
               (remove-if (lambda (name) (member name hits))
                          (attached-object-hits world robot attached attached-objects intended))))))
 
-(defvar *link-indices* (make-hash-table :test 'eq :weakness :key :synchronized t)
-  "Kinematic model of an articulated object -> EQUAL hash table of its link names' indices.")
-
 (defun robot-link-index (robot link)
   "The index of the link named LINK of ROBOT (an articulated object), or NIL when it has none."
-  (let* ((model (btr::%model robot))
-         (table (or (gethash model *link-indices*)
-                    (setf (gethash model *link-indices*)
-                          (let ((table (make-hash-table :test 'equal)))
-                            (loop for name across (btr::km-link-names model) for i from 0
-                                  do (setf (gethash name table) i))
-                            table)))))
-    (values (gethash link table))))
+  (values (gethash link (btr::km-link-index (btr::%model robot)))))
 
 (defvar *last-allowed-triples* nil
   "(world robot intended triples objects): the last answer of ALLOWED-CONTACT-TRIPLES and the

@@ -151,18 +151,10 @@ again only when *BASE-OFFSETS* changed), or only (0 0) without MOVE-BASE. Not to
    (cl-transforms:transform* (cl-transforms:pose->transform tcp-map-pose)
                              (cl-transforms:transform-inv (tcp-in-ee-transform arm robot)))))
 
-(defvar *goal-bound-links* '()
-  "((urdf tip-link) . links): GOAL-BOUND-LINKS computed so far (the newest 8).")
-
 (defun goal-bound-links (chain robot)
   "The links of ROBOT that the goal of the IK CHAIN fixes in the map: its tip link and every
 link below it (the wrist, the hand, the fingers)."
-  (let ((key (list (btr:urdf robot) (ik-chain-tip-link chain))))
-    (or (cdr (assoc key *goal-bound-links* :test #'equal))
-        (let ((links (link-descendants robot (ik-chain-tip-link chain))))
-          (setf *goal-bound-links*
-                (cons (cons key links) (subseq *goal-bound-links* 0 (min 7 (length *goal-bound-links*)))))
-          links))))
+  (link-descendants robot (ik-chain-tip-link chain)))
 
 (defparameter *goal-bound-penetration* 0.01d0
   "Metres a link that the tool goal fixes must reach into the world before MOVE-TCP gives the
@@ -176,21 +168,17 @@ the contacts the motion is meant to make: no other base offset or torso value ca
 the hand stays at its goal."
   (let* ((world (btr:world robot))
          (links (loop for chain in chains append (goal-bound-links chain robot)))
-         (attached (remove-duplicates (mapcar #'first (btr:attached-objects robot))))
-         (except (remove nil (append (mapcar (lambda (name) (btr:object world name)) attached)
-                                     (remove :static-plane (btr:objects world)
-                                             :key #'btr:object-kind :test-not #'eq))))
+         (except (multiple-value-bind (attached attached-objects planes)
+                     (collision-excepts world robot)
+                   (declare (ignore attached))
+                   (append planes attached-objects)))
          (intended (intended-contacts robot)))
-    (loop for (ha la hb lb) in (cram-native:object-contacts
-                                (btr::world-handle world) (btr:object-handle robot)
-                                :threshold (- *goal-bound-penetration*)
-                                :except (mapcar #'btr:object-handle except))
-          for a = (btr::object-by-handle world ha)
-          for b = (btr::object-by-handle world hb)
+    (loop for (a la b lb) in (btr::contact-records world robot except
+                                                   (- *goal-bound-penetration*))
           for other = (if (eq a robot) b a)
-          for link = (if (eq a robot) (btr::link-name-of a la) (btr::link-name-of b lb))
-          for other-link = (if (eq a robot) (btr::link-name-of b lb) (btr::link-name-of a la))
-          thereis (and a b link (not (eq other robot))
+          for link = (if (eq a robot) la lb)
+          for other-link = (if (eq a robot) lb la)
+          thereis (and link (not (eq other robot))
                        (member link links :test #'string=)
                        (not (intended-contact-p intended robot link other other-link))))))
 
