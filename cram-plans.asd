@@ -292,6 +292,7 @@ IK, collision checks, TF and process modules (URDF-PROJ, alias PR2-PROJ)."
                (:file "ik")
                (:file "ik-solver")
                (:file "low-level-arms")
+               (:file "reach-memory")
                (:file "low-level-tcp")
                (:file "process-modules")
                (:file "projection-environment")))
@@ -537,7 +538,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "urdf-proj-tests")
                (:file "urdf-proj-ik-fallback-tests")
                (:file "urdf-proj-arm-ik-tests")
-               (:file "urdf-proj-collision-check-tests")))
+               (:file "urdf-proj-collision-check-tests")
+               (:file "urdf-proj-reach-memory-tests")))
 
 (defsystem "cram-plans/tests/costmap"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-location-costmap" "cram-plans/cram-pr2-description")

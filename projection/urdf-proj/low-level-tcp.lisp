@@ -207,8 +207,21 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                                   (ik-chain-joint-names chain))))
          (sweep-start (and *sweep-check* (robot-state-vectors robot)))
          (goal-checked (not (member collision-mode '(nil :avoid-all))))
-         (swept nil))
+         (swept nil)
+         (goals-key (reach-goals-key goals)))
     (block search
+      ;; the state found for the same goals before, when the base may go there from here
+      (let ((known (recall-reach-state robot goals-key base0 move-base torso fixed-torso)))
+        (when known
+          (setf (btr:pose robot) (reach-state-base known))
+          (btr:set-robot-state-from-joints (reach-state-joints known) robot)
+          (when (and (perform-collision-check collision-mode arms robot)
+                     (multiple-value-bind (ok sweeps) (tcp-sweep-verdict sweep-start collision-mode arms robot)
+                       (unless ok (setf swept sweeps))
+                       ok))
+            (return-from search t))
+          (setf (btr:pose robot) base0)
+          (btr:set-robot-state-from-joints state0 robot)))
       (block candidates
         (dolist (offset (base-candidates move-base))
           (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
@@ -226,6 +239,9 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                                  (tcp-sweep-verdict sweep-start collision-mode arms robot)
                                (unless ok (setf swept (or swept sweeps)))
                                ok))
+                    (remember-reach-state robot goals-key (btr:pose robot)
+                                          (append (and torso-value (list (list torso torso-value)))
+                                                  (apply #'append solutions)))
                     (return-from search t))
                   (let ((hopeless (and (not clear) (not goal-checked)
                                        (setf goal-checked t)

@@ -59,7 +59,8 @@ and COMMON-DESIG:WAIT-PM."
      (desig:*default-role* :projection-role)
      (*tf-from-belief-state* t)
      (*environment-tf-signatures* (make-hash-table :test 'eq :synchronized t))
-     (*ik-random-state* (sb-ext:seed-random-state *ik-random-seed*)))
+     (*ik-random-state* (sb-ext:seed-random-state *ik-random-seed*))
+     (*reach-memory* (make-reach-memory)))
     :process-module-definitions (urdf-proj-navigation urdf-proj-torso urdf-proj-neck
                                  urdf-proj-perception urdf-proj-grippers urdf-proj-arms
                                  urdf-proj-noop common-desig:wait-pm)

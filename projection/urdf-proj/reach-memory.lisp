@@ -1,0 +1,99 @@
+;;;; The reach memory: the robot states MOVE-TCP's search found for tool goals, offered first
+;;;; when the same goals are asked for again from near the same base pose. A pre-check that
+;;;; found how the hand reaches a grasp is then followed by a motion that reaches it the same
+;;;; way, instead of searching again from another arm configuration (where the IK may settle on
+;;;; a redundant solution that collides and miss the one the pre-check found).
+
+(in-package :cram-urdf-projection)
+
+(defparameter *reach-memory-size* 48
+  "How many found reach states the reach memory of a projection run keeps (the newest).")
+
+(defstruct (reach-memory (:constructor make-reach-memory ()))
+  "The reach states found in one projection run, newest first (*REACH-MEMORY*)."
+  (entries '() :type list)
+  (lock (sb-thread:make-mutex :name "reach memory")))
+
+(defvar *reach-memory* nil
+  "NIL (no memory), or the REACH-MEMORY of the current projection run: every projection
+environment starts with a fresh one, so that a run does not depend on the runs before it.")
+
+(defstruct (reach-state (:constructor make-reach-state (robot goals base joints)))
+  robot   ; the robot object
+  goals   ; list of (arm . 7-vector of the tool frame's map pose)
+  base    ; map pose of the base
+  joints) ; ((joint value) ...): the torso and the arm joints
+
+(defun pose-7 (pose)
+  (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
+    (vector (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
+            (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q))))
+
+(defun same-pose-7-p (a b)
+  "True when the 7-vectors A and B are the same pose (0.001 mm; a quaternion and its negation
+are one rotation)."
+  (and (loop for i below 3 always (< (abs (- (aref a i) (aref b i))) 1d-6))
+       (> (abs (loop for i from 3 below 7 sum (* (aref a i) (aref b i)))) (- 1d0 1d-12))))
+
+(defun reach-goals-key (goals)
+  "GOALS ((arm . tcp-map-pose) ...) as the reach memory compares them."
+  (mapcar (lambda (g) (cons (car g) (pose-7 (cdr g)))) goals))
+
+(defun same-goals-p (a b)
+  (and (= (length a) (length b))
+       (every (lambda (x y) (and (eq (car x) (car y)) (same-pose-7-p (cdr x) (cdr y)))) a b)))
+
+(defun base-within-offsets-p (base base0 move-base)
+  "True when the map pose BASE is one MOVE-TCP may put the base at from BASE0: BASE0 itself
+without MOVE-BASE, else BASE0 shifted (same heading) by at most the largest of
+*BASE-OFFSETS* along each of its axes."
+  (let* ((rel (cl-transforms:transform*
+               (cl-transforms:transform-inv (cl-transforms:pose->transform base0))
+               (cl-transforms:pose->transform base)))
+         (d (cl-transforms:translation rel))
+         (reach (if move-base (reduce #'max (mapcar #'abs *base-offsets*) :initial-value 0d0) 0d0)))
+    (and (< (abs (cl-transforms:z d)) 1d-6)
+         (< (cl-transforms:angle-between-quaternions (cl-transforms:rotation rel)
+                                                     (cl-transforms:make-identity-rotation))
+            1d-6)
+         (<= (abs (cl-transforms:x d)) (+ reach 1d-6))
+         (<= (abs (cl-transforms:y d)) (+ reach 1d-6)))))
+
+(defun recall-reach-state (robot goals base0 move-base torso fixed-torso)
+  "The newest remembered REACH-STATE of ROBOT for GOALS (a REACH-GOALS-KEY) that MOVE-TCP may
+take from the base pose BASE0 (BASE-WITHIN-OFFSETS-P) and, with FIXED-TORSO, without moving
+the joint TORSO; NIL when there is none."
+  (let ((memory *reach-memory*))
+    (when memory
+      (let ((entries (sb-thread:with-mutex ((reach-memory-lock memory))
+                       (reach-memory-entries memory))))
+        (find-if (lambda (e)
+                   (and (eq (reach-state-robot e) robot)
+                        (same-goals-p (reach-state-goals e) goals)
+                        (base-within-offsets-p (reach-state-base e) base0 move-base)
+                        (or (not fixed-torso) (null torso)
+                            (let ((v (second (assoc torso (reach-state-joints e) :test #'equal))))
+                              (or (null v) (< (abs (- v (btr:joint-state robot torso))) 1d-9))))))
+                 entries)))))
+
+(defun remember-reach-state (robot goals base joints)
+  "Keep the state (base map pose BASE, JOINTS ((joint value) ...)) in which ROBOT reached
+GOALS (a REACH-GOALS-KEY) in *REACH-MEMORY*, newest first, up to *REACH-MEMORY-SIZE*."
+  (let ((memory *reach-memory*))
+    (when memory
+      (let ((entry (make-reach-state robot goals base joints)))
+        (sb-thread:with-mutex ((reach-memory-lock memory))
+          (let ((entries (cons entry (remove-if (lambda (e) (and (eq (reach-state-robot e) robot)
+                                                                  (same-goals-p (reach-state-goals e) goals)))
+                                                (reach-memory-entries memory)))))
+            (setf (reach-memory-entries memory)
+                  (if (> (length entries) *reach-memory-size*)
+                      (subseq entries 0 *reach-memory-size*)
+                      entries))))))))
+
+(defun forget-reach-states ()
+  "Empty the reach memory of the current projection run (*REACH-MEMORY*)."
+  (let ((memory *reach-memory*))
+    (when memory
+      (sb-thread:with-mutex ((reach-memory-lock memory))
+        (setf (reach-memory-entries memory) '())))))
