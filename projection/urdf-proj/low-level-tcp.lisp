@@ -52,9 +52,26 @@ for the robot's current base pose and torso, or NIL. Quick distance check before
                                      (projection-error "Joint ~s is not a joint of ~s." joint
                                                        (btr:name robot)))))))
 
+(defun beyond-chain-reach-p (chain first-child point robot)
+  "True when the map POINT is farther from the origin of ROBOT's link FIRST-CHILD (the child of
+CHAIN's first joint) than the chain reaches, with 5 cm to spare."
+  (let* ((index (or (robot-link-index robot first-child)
+                    (projection-error "Link ~s is not a link of ~s." first-child (btr:name robot))))
+         (origin (cram-native:robot-link-pose (btr::whandle robot) (btr:object-handle robot) index))
+         (limit (+ (ik-chain-reach chain) 0.05d0)))
+    (declare (type (simple-array double-float (*)) origin) (type double-float limit))
+    (let ((dx (- (aref origin 0) (float (cl-transforms:x point) 1d0)))
+          (dy (- (aref origin 1) (float (cl-transforms:y point) 1d0)))
+          (dz (- (aref origin 2) (float (cl-transforms:z point) 1d0))))
+      (> (+ (* dx dx) (* dy dy) (* dz dz)) (* limit limit)))))
+
 (defun chain-ik-from-map (chain ee first-child ee-map-pose robot seed max-restarts)
   "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
 the child link of the chain's first joint FIRST-CHILD."
+  (when (and (string= ee (ik-chain-tip-link chain))
+             (beyond-chain-reach-p chain first-child (cl-transforms:origin ee-map-pose) robot))
+    ;; the quick distance check before anything else is computed
+    (return-from chain-ik-from-map nil))
   (let* ((base-pose (btr:link-pose robot (ik-chain-base-link chain)))
          ;; the chain ends at the wrist; the end-effector link is the wrist or hangs below it
          (tip (ik-chain-tip-link chain))

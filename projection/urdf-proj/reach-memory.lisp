@@ -18,11 +18,13 @@
   "NIL (no memory), or the REACH-MEMORY of the current projection run: every projection
 environment starts with a fresh one, so that a run does not depend on the runs before it.")
 
-(defstruct (reach-state (:constructor make-reach-state (robot goals base joints)))
+(defstruct (reach-state (:constructor make-reach-state (robot goals base joints
+                                                        &aux (hash (goals-hash goals)))))
   robot   ; the robot object
   goals   ; list of (arm . 7-vector of the tool frame's map pose)
   base    ; map pose of the base
-  joints) ; ((joint value) ...): the torso and the arm joints
+  joints  ; ((joint value) ...): the torso and the arm joints
+  (hash 0 :type fixnum)) ; GOALS-HASH of the goals
 
 (defun pose-7 (pose)
   (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
@@ -38,6 +40,20 @@ are one rotation)."
 (defun reach-goals-key (goals)
   "GOALS ((arm . tcp-map-pose) ...) as the reach memory compares them."
   (mapcar (lambda (g) (cons (car g) (pose-7 (cdr g)))) goals))
+
+(defun goals-hash (goals)
+  "A fixnum of GOALS (a REACH-GOALS-KEY) rounded to 0.1 mm and 1e-4 of the quaternion (sign
+made positive): goals that are the same pose mostly have the same hash, so the memory compares
+goals in full only when the hashes agree."
+  (let ((h 17))
+    (declare (type fixnum h))
+    (dolist (g goals h)
+      (let* ((v (cdr g)) (sign (if (minusp (aref v 6)) -1d0 1d0)))
+        (setf h (logand most-positive-fixnum (+ (* h 31) (sxhash (car g)))))
+        (dotimes (i 7)
+          (let ((x (if (< i 3) (aref v i) (* sign (aref v i)))))
+            (setf h (logand most-positive-fixnum
+                            (+ (* h 31) (logand #xffffffff (round x 1d-4)))))))))))
 
 (defun same-goals-p (a b)
   (and (= (length a) (length b))
@@ -64,11 +80,13 @@ without MOVE-BASE, else BASE0 shifted (same heading) by at most the largest of
 take from the base pose BASE0 (BASE-WITHIN-OFFSETS-P) and, with FIXED-TORSO, without moving
 the joint TORSO; NIL when there is none."
   (let ((memory *reach-memory*))
-    (when memory
-      (let ((entries (sb-thread:with-mutex ((reach-memory-lock memory))
+    (when (and memory (reach-memory-entries memory))
+      (let ((hash (goals-hash goals))
+            (entries (sb-thread:with-mutex ((reach-memory-lock memory))
                        (reach-memory-entries memory))))
         (find-if (lambda (e)
-                   (and (eq (reach-state-robot e) robot)
+                   (and (= (reach-state-hash e) hash)
+                        (eq (reach-state-robot e) robot)
                         (same-goals-p (reach-state-goals e) goals)
                         (base-within-offsets-p (reach-state-base e) base0 move-base)
                         (or (not fixed-torso) (null torso)
