@@ -2,7 +2,8 @@
 ;;;; given base poses, their failures and retries, in the kitchen of the belief state.
 
 (defpackage :cram-plans-tests-fetch-deliver
-  (:use :cl :fiveam))
+  (:use :cl :fiveam)
+  (:import-from :cram-plans-tests #:calls-during))
 
 (in-package :cram-plans-tests-fetch-deliver)
 
@@ -553,3 +554,38 @@ sink behind it; either way the held object ends where it was, attached to the sa
     (spawn :lying-spoon 0)
     (is (< 0.085 (drop :hanging-spoon) 0.11) "half its length less half its thickness")
     (is (< (drop :lying-spoon) 0.02))))
+
+(test a-check-without-room-answers-from-the-check-with-room-at-the-same-base-pose
+  ;; a cup's place within 6 cm of the island's origin is beyond the reach of a robot standing
+  ;; at the island's end: no place leaves it room there. The check that requires room keeps
+  ;; what it would have taken without, and the check without the requirement at the same base
+  ;; pose answers from that
+  (fetched-at-island)
+  (let* ((?surface (desig:an object (type counter-top) (urdf-name kitchen-island-surface)
+                             (part-of iai-kitchen)))
+         (?cup (desig:an object (type cup)))
+         (fd-plans::*places-to-leave* (list (desig:a location (on ?surface) (for ?cup)
+                                                     (range 0.06))))
+         (bottle (desig:an object (type bottle) (name object-1)))
+         (arm (first (pp-plans::arms-holding :object-1)))
+         (target (poses-location *island* (mapcar #'+ *island* '(0 0.05 0))))
+         (base (apply #'pose *robot-at-island*)))
+    (flet ((check (require-room)
+             (let ((fd-plans::*require-room* require-room))
+               (multiple-value-bind (calls result)
+                   (calls-during 'fd-plans::placeable-at-p
+                                 (lambda () (fd-plans::object-placeable-from-p bottle arm target base)))
+                 (list calls result)))))
+      (let ((unchecked (second (check nil))))
+        (is-true unchecked "the bottle can be put down at the island from there")
+        (fd-plans::with-base-pose-verdicts ()
+          (destructuring-bind (calls result) (check t)
+            (is (null result) "no place leaves room")
+            (is (plusp calls)))
+          (destructuring-bind (calls result) (check nil)
+            (is (= 0 calls) "answered from the check that required room")
+            (is (and result unchecked
+                     (< (cl-transforms:v-dist (cl-transforms:origin (pp-plans:pose-in-map result))
+                                              (cl-transforms:origin (pp-plans:pose-in-map unchecked)))
+                        1d-6))
+                "the same place as a check of its own takes")))))))

@@ -2,7 +2,7 @@
 
 (defpackage :cram-plans-tests
   (:use :cl)
-  (:export #:all #:run-all #:shared-models-directory))
+  (:export #:all #:run-all #:shared-models-directory #:calls-during))
 
 (in-package :cram-plans-tests)
 
@@ -27,3 +27,11 @@ benchmarks may read when present, never commit."
   (let ((dir (uiop:merge-pathnames* (make-pathname :directory '(:relative :up "shared" "models"))
                                     (asdf:system-source-directory "cram-plans"))))
     (namestring (or (probe-file dir) dir))))
+
+(defun calls-during (name thunk)
+  "Call THUNK; return how often the function NAME was called meanwhile, and THUNK's value."
+  (let ((calls 0))
+    (sb-int:encapsulate name 'count (lambda (f &rest args) (incf calls) (apply f args)))
+    (let ((value (unwind-protect (funcall thunk)
+                   (sb-int:unencapsulate name 'count))))
+      (values calls value))))

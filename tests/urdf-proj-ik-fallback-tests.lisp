@@ -6,14 +6,6 @@
 
 (in-suite urdf-proj)
 
-(defun calls-during (name thunk)
-  "Call THUNK; return how often the function NAME was called meanwhile, and THUNK's value."
-  (let ((calls 0))
-    (sb-int:encapsulate name 'count (lambda (f &rest args) (incf calls) (apply f args)))
-    (let ((value (unwind-protect (funcall thunk)
-                   (sb-int:unencapsulate name 'count))))
-      (values calls value))))
-
 (defun lisp-attempts (thunk)
   "Call THUNK; return how many attempts the Lisp IK solver made meanwhile, and THUNK's value."
   (calls-during 'urdf-proj::ik-attempt thunk))

@@ -1,7 +1,8 @@
 ;;;; Tests of the simulated robot (URDF-PROJ) and the motion groundings (COMMON-DESIG).
 
 (defpackage :cram-plans-tests.urdf-proj
-  (:use :cl :fiveam))
+  (:use :cl :fiveam)
+  (:import-from :cram-plans-tests #:calls-during))
 
 (in-package :cram-plans-tests.urdf-proj)
 

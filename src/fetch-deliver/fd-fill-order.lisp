@@ -91,7 +91,8 @@ there is none for one with the best sample there is.")
 its equation chain), drawn one at a time in the costmap's order, that satisfies PREDICATE, or
 NIL. With SCORE (a function of a solution, a number), the first one that satisfies PREDICATE
 and scores BEST, else (unless REQUIRE-BEST) the first with the highest score among all COUNT
-solutions."
+solutions. Second value: the first with the highest score even under REQUIRE-BEST (NIL: none
+satisfied PREDICATE)."
   (let ((found nil) (found-score nil))
     (loop repeat count
           for current = target then (desig:next-solution current)
@@ -104,4 +105,4 @@ solutions."
                        (return-from find-placing-sample current))
                      (when (or (null found-score) (> s found-score))
                        (setf found current found-score s)))))
-    (and (not require-best) found)))
+    (values (and (not require-best) found) found)))

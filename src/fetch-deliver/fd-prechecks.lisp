@@ -112,6 +112,11 @@ object can be grasped again there)."
                     (object-regraspable-at-p
                      object (pp-plans:pose-in-map (desig:reference candidate)))))))))
 
+(defvar *placing-fallback* nil
+  "NIL, or a cons whose car CHECK-PLACING-COLLISIONS sets when it finds no sample that leaves
+*PLACES-TO-LEAVE* room while *REQUIRE-ROOM* is true: the map pose of the sample it would have
+taken without that requirement, or :NONE when no sample could be put down at all.")
+
 (defun check-placing-collisions (object arm target &key first)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
 which ARM puts OBJECT down free of collisions (the designator of that solution; samples beyond
@@ -127,15 +132,20 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
       (let* ((?pose first) (candidate (desig:a location (pose ?pose))))
         (when (placeable-at-p object arm candidate regrasp)
           (return-from check-placing-collisions (values candidate t)))))
-    (let ((found (find-placing-sample (lambda (candidate)
-                                        (placeable-at-p object arm candidate regrasp))
-                                      target *placing-check-samples*
-                                      :score (and *places-to-leave*
-                                                  (lambda (candidate)
-                                                    (room-left object candidate)))
-                                      :best (length *places-to-leave*)
-                                      :require-best *require-room*)))
-      (when found (return-from check-placing-collisions found)))
+    (multiple-value-bind (found best)
+        (find-placing-sample (lambda (candidate)
+                               (placeable-at-p object arm candidate regrasp))
+                             target *placing-check-samples*
+                             :score (and *places-to-leave*
+                                         (lambda (candidate)
+                                           (room-left object candidate)))
+                             :best (length *places-to-leave*)
+                             :require-best *require-room*)
+      (when found (return-from check-placing-collisions found))
+      (when *placing-fallback*
+        ;; what a check that does not require room would have taken from these samples
+        (setf (car *placing-fallback*)
+              (if best (pp-plans:pose-in-map (desig:reference best)) :none))))
     (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
@@ -336,11 +346,34 @@ places reachable from FROM (the robot's name or a base pose): CRAM's T' = target
 (reachable-from robot). A fresh designator, not equated with TARGET."
   (desig:extend-designator-properties (desig:current-desig target) `((:reachable-from ,from))))
 
+(defun placing-fallback-key (object arm target pose)
+  "The key under which *BASE-POSE-VERDICTS* keeps what the placing check at the base POSE
+found without room for the later objects (OBJECT-PLACEABLE-FROM-P)."
+  (list* :placing-fallback (base-pose-key pose) (robot-joints-key)
+         (place-key (list object arm target))))
+
 (defun object-placeable-from-p (object arm target pose)
   "The map pose of the first of *PLACING-BASE-CHECK-SAMPLES* solutions of TARGET within reach
 (TARGET-REACHABLE-FROM) at which the robot, standing at POSE (map), puts OBJECT held in ARM
 down free of collisions; NIL when there is none. Checked in the belief state; the robot is put
-back."
+back. Within WITH-BASE-POSE-VERDICTS, a check while *REQUIRE-ROOM* is true that finds no
+sample leaving the later objects room keeps what it would have taken without that requirement
+\(or that nothing could be put down), and the check of the same base pose, robot state and
+place without the requirement answers from that instead of drawing samples again."
+  (let* ((key (and *base-pose-verdicts* (placing-fallback-key object arm target pose)))
+         (kept (and key (not *require-room*)
+                    (sb-thread:with-mutex (*base-pose-verdicts-lock*)
+                      (gethash key *base-pose-verdicts*)))))
+    (cond ((eq kept :none) nil)
+          (kept (cl-transforms-stamped:pose->pose-stamped cram-tf:*fixed-frame* 0d0 kept))
+          (t (let* ((*placing-fallback* (and key *require-room* (list nil)))
+                    (found (check-placing-from object arm target pose)))
+               (when (and *placing-fallback* (car *placing-fallback*))
+                 (sb-thread:with-mutex (*base-pose-verdicts-lock*)
+                   (setf (gethash key *base-pose-verdicts*) (car *placing-fallback*))))
+               found)))))
+
+(defun check-placing-from (object arm target pose)
   (call-restoring-robot
    (lambda ()
      (let ((base (pp-plans:pose-in-map pose)))
