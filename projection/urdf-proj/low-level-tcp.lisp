@@ -199,6 +199,66 @@ the hand stays at its goal."
                        (member link links :test #'string=)
                        (not (intended-contact-p intended robot link other other-link))))))
 
+(defun shoulder-positions (robot ee-goals torso torsos)
+  "For each value of TORSOS (NIL: the torso as it is), a list with, per goal of EE-GOALS ((arm
+ee-pose chain end-effector first-child) ...), the map position (a 3-vector of doubles) of the
+goal's FIRST-CHILD link with the joint TORSO at that value and the robot otherwise as it is,
+or NIL for a goal whose end effector is not its chain's tip (not filtered). Computed without
+changing the belief state."
+  (let* ((world (btr::whandle robot))
+         (handle (btr:object-handle robot))
+         (links (mapcar (lambda (g) (robot-link-index robot (fifth g))) ee-goals))
+         (tips (mapcar (lambda (g) (string= (fourth g) (ik-chain-tip-link (third g)))) ee-goals))
+         (joint (and torso (some #'identity torsos) (btr::joint-index robot torso))))
+    (flet ((positions (v)
+             (declare (type (simple-array double-float (*)) v))
+             (loop for link in links for tip in tips for i from 0
+                   collect (and link tip
+                                (let ((p (make-array 3 :element-type 'double-float)))
+                                  (replace p v :start2 (* 7 i))
+                                  p)))))
+      (let ((indices (mapcar (lambda (l) (or l 0)) links)))
+        (mapcar (lambda (value)
+                  (positions
+                   (if value
+                       (multiple-value-bind (lo hi) (btr:joint-limits robot torso)
+                         (cram-native:robot-link-poses-if
+                          world handle (list joint)
+                          (list (float (max (or lo value) (min (or hi value) value)) 1d0))
+                          indices))
+                       (let ((v (make-array (* 7 (length indices)) :element-type 'double-float)))
+                         (loop for l in indices for i from 0
+                               do (replace v (cram-native:robot-link-pose world handle l)
+                                           :start1 (* 7 i)))
+                         v))))
+                torsos)))))
+
+(defun base-offset-shift (base dx dy)
+  "How far (a 3-vector of doubles, map) a point fixed to the robot moves when its base goes
+from BASE to OFFSET-BASE-POSE BASE DX DY."
+  (let ((v (cl-transforms:rotate (cl-transforms:orientation base)
+                                 (cl-transforms:make-3d-vector dx dy 0))))
+    (make-array 3 :element-type 'double-float
+                  :initial-contents (list (float (cl-transforms:x v) 1d0)
+                                          (float (cl-transforms:y v) 1d0)
+                                          (float (cl-transforms:z v) 1d0)))))
+
+(defun goals-within-reach-p (shoulders shift ee-goals)
+  "False when a goal of EE-GOALS lies farther from its shoulder (SHOULDERS, one position or
+NIL per goal, moved by SHIFT) than its chain reaches, with the 5 cm to spare of
+CHAIN-IK-FROM-MAP's own check; true otherwise."
+  (declare (type (simple-array double-float (3)) shift))
+  (loop for s in shoulders for g in ee-goals
+        always (or (null s)
+                   (let* ((goal (cl-transforms:origin (second g)))
+                          (limit (+ (ik-chain-reach (third g)) 0.05d0))
+                          (dx (- (+ (aref s 0) (aref shift 0)) (float (cl-transforms:x goal) 1d0)))
+                          (dy (- (+ (aref s 1) (aref shift 1)) (float (cl-transforms:y goal) 1d0)))
+                          (dz (- (+ (aref s 2) (aref shift 2)) (float (cl-transforms:z goal) 1d0))))
+                     (declare (type double-float limit dx dy dz)
+                              (type (simple-array double-float (*)) s))
+                     (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* limit limit))))))
+
 (defun reach-tcp-poses (goals collision-mode move-base fixed-torso)
   "Bring each (arm . tcp-map-pose) of GOALS there at once. Tries base offsets and torso values
 in order; the first candidate with IK solutions for every arm that passes the collision check
@@ -240,9 +300,20 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
           (setf (btr:pose robot) base0)
           (btr:set-robot-state-from-joints state0 robot)))
       (block candidates
-        (dolist (offset (base-candidates move-base))
-          (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset)))
-          (dolist (torso-value torsos)
+        ;; where each goal's shoulder would be for each torso value: candidates whose goals
+        ;; are out of the arm's reach are passed over without setting the robot's state
+        (let ((shoulders (shoulder-positions robot ee-goals torso torsos)))
+         (dolist (offset (base-candidates move-base))
+          (let ((shift (base-offset-shift base0 (first offset) (second offset)))
+                (placed nil))
+           (loop
+            for torso-value in torsos
+            for torso-shoulders in shoulders
+            when (goals-within-reach-p torso-shoulders shift ee-goals)
+            do
+            (unless placed
+              (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset))
+                    placed t))
             (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
             (let ((solutions (loop for (nil pose chain ee first-child) in ee-goals
                                    for q = (chain-ik-from-map chain ee first-child pose robot nil 8)
@@ -264,7 +335,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                                        (setf goal-checked t)
                                        (goal-bound-collision-p (mapcar #'third ee-goals) robot))))
                     (btr:set-robot-state-from-joints arms0 robot)
-                    (when hopeless (return-from candidates)))))))))
+                    (when hopeless (return-from candidates)))))))))))
       (setf (btr:pose robot) base0)
       (btr:set-robot-state-from-joints state0 robot)
       (report-sweeps swept :robot robot :before sweep-start)  ; signals under :fail
