@@ -589,3 +589,26 @@ sink behind it; either way the held object ends where it was, attached to the sa
                                               (cl-transforms:origin (pp-plans:pose-in-map unchecked)))
                         1d-6))
                 "the same place as a check of its own takes")))))))
+
+(test a-check-for-any-grasp-tries-the-coarse-candidates-first
+  ;; the bottle on the island: some grasp is reachable from the island's end, none from the
+  ;; sink; the check for any grasp finds one with fewer IK solutions than the full check needs
+  ;; for the first reachable grasp, and that grasp passes the full check
+  (setup *island*)
+  (let ((bottle (desig:an object (type bottle) (name object-1)))
+        (robot (btr:get-robot-object)))
+    (setf (btr:pose robot) (pp-plans:pose-in-map (apply #'pose *robot-at-island*)))
+    (multiple-value-bind (coarse-solves found)
+        (calls-during 'urdf-proj:solve-ik
+                      (lambda () (fd-plans::check-picking-up-collisions bottle :any t)))
+      (destructuring-bind (arm grasp) found
+        (is (equal found (fd-plans::check-picking-up-collisions bottle :arms (list arm)
+                                                                       :grasps (list grasp)))
+            "the grasp found passes the full check"))
+      (let ((full-solves (calls-during 'urdf-proj:solve-ik
+                                       (lambda () (fd-plans::check-picking-up-collisions bottle)))))
+        (is (<= coarse-solves full-solves) "~d IK solutions with the coarse candidates first, ~d without"
+            coarse-solves full-solves)))
+    (setf (btr:pose robot) (pp-plans:pose-in-map (apply #'pose *robot-at-sink*)))
+    (signals common-fail:object-unreachable
+      (fd-plans::check-picking-up-collisions bottle :any t))))

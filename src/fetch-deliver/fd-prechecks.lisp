@@ -66,29 +66,36 @@ afterwards. Checked in the belief state."
                (funcall thunk))
           (btr:set-robot-state-from-joints before robot)))))
 
-(defun check-picking-up-collisions (object &key arms grasps)
+(defun check-picking-up-collisions (object &key arms grasps any)
   "The first (arm grasp) of picking up OBJECT, for ARMS and GRASPS (NIL: any), whose grasp
 poses the arm reaches free of collisions with its gripper opened as the action opens it, among
-up to *PICKING-UP-CHECK-SAMPLES*; signals
-OBJECT-UNREACHABLE when none does."
+up to *PICKING-UP-CHECK-SAMPLES*; signals OBJECT-UNREACHABLE when none does. With ANY (when
+only whether some grasp is reachable matters) the grasps are first tried with the pre-checks'
+coarse base offsets and torso heights, which find a reachable grasp sooner when there is one
+(the coarse candidates are some of the full ones), and only when none is found there with all
+candidates: the answer can then be another grasp than the first reachable one."
   (let* ((?object object)
          (groundings (pp-plans:ground-action
                       :picking-up (desig:an action (type picking-up) (object ?object))))
          (tried 0))
-    (dolist (grounding groundings)
-      (let* ((resolved (second grounding))
-             (arm (desig:desig-prop-value resolved :arm))
-             (grasp (desig:desig-prop-value resolved :grasp)))
-        (when (and (or (null arms) (member arm arms)) (or (null grasps) (member grasp grasps)))
-          (when (>= (incf tried) *picking-up-check-samples*) (return))
-          ;; the hand as it closes in on the object: open as wide as the action opens it
-          (when (call-with-gripper-opening
-                 arm (desig:desig-prop-value resolved :gripper-opening)
-                 (lambda ()
-                   (pp-plans::with-object-being-grasped (object)
-                     (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
-                                             '(:grasping) :coarse nil))))
-            (return-from check-picking-up-collisions (list arm grasp))))))
+    (flet ((try (coarse)
+             (setf tried 0)
+             (dolist (grounding groundings)
+               (let* ((resolved (second grounding))
+                      (arm (desig:desig-prop-value resolved :arm))
+                      (grasp (desig:desig-prop-value resolved :grasp)))
+                 (when (and (or (null arms) (member arm arms)) (or (null grasps) (member grasp grasps)))
+                   (when (>= (incf tried) *picking-up-check-samples*) (return))
+                   ;; the hand as it closes in on the object: open as wide as the action opens it
+                   (when (call-with-gripper-opening
+                          arm (desig:desig-prop-value resolved :gripper-opening)
+                          (lambda ()
+                            (pp-plans::with-object-being-grasped (object)
+                              (trajectory-reachable-p arm (desig:desig-prop-value resolved :trajectory)
+                                                      '(:grasping) :coarse coarse))))
+                     (return-from check-picking-up-collisions (list arm grasp))))))))
+      (when any (try t))
+      (try nil))
     (cpl:fail 'common-fail:object-unreachable
               :description (format nil "No grasp of ~a with the ~{~(~a~)~^ or ~} arm is reachable ~
                                         free of collisions from here (~d tried)."
@@ -243,7 +250,8 @@ belief state (CALL-WITH-OBJECT-LET-GO-AT)."
    object (resting-pose object pose)
    (lambda (o)
      (declare (ignore o))
-     (and (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object))
+     (and (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object)
+                                                                   :any t)
                                t)
             ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil))
           (object-visible-from-p object (btr:pose (btr:get-robot-object)))))))
@@ -321,7 +329,7 @@ state; the robot is put back."
   (call-restoring-robot
    (lambda ()
      (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
-     (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps) t)
+     (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps :any t) t)
        (common-fail:object-unreachable () nil)))))
 
 (defparameter *placing-base-check-samples* 12
