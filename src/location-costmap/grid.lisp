@@ -113,9 +113,19 @@ be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies 
    (region :initform nil :accessor %region
            :documentation "(row-0 row-1 col-0 col-1) outside which the grid is 0.")
    (distribution :initform nil :accessor %distribution)
-   (random-state :initarg :random-state :reader costmap-random-state))
+   (random-state :initarg :random-state :accessor %random-state
+                 :documentation "The costmap's random state, or until it is first asked for
+\(COSTMAP-RANDOM-STATE) the integer it is seeded with: seeding one takes longer than building
+most costmaps, and many are merged or only counted and never sampled."))
   (:documentation "A grid over the map whose cell values are the product of the registered
 cost functions; samples are poses drawn with probability proportional to the cell values."))
+
+(defun costmap-random-state (costmap)
+  "The random state COSTMAP samples with, seeded from its seed the first time it is asked for."
+  (let ((state (%random-state costmap)))
+    (if (integerp state)
+        (setf (%random-state costmap) (sb-ext:seed-random-state state))
+        state)))
 
 (defmethod print-object ((c location-costmap) stream)
   (print-unreadable-object (c stream :type t :identity t)
@@ -178,8 +188,11 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
   (check-generator-list (orientation-generators c) "orientation generators")
   (check-generator-list (height-generators c) "height generators")
   (unless (slot-boundp c 'random-state)
-    (setf (slot-value c 'random-state)
-          (sb-ext:seed-random-state (random (expt 2 62) *costmap-random-state*))))
+    (setf (slot-value c 'random-state) (random (expt 2 62) *costmap-random-state*)))
+  (unless (or (random-state-p (slot-value c 'random-state))
+              (typep (slot-value c 'random-state) '(integer 0)))
+    (error "LOCATION-COSTMAP: the random state ~s, expected a random state or a non-negative ~
+            integer to seed one with." (slot-value c 'random-state)))
   (setf (slot-value c 'columns) (max 1 (round (to-double (width c)) (resolution c)))
         (slot-value c 'rows) (max 1 (round (to-double (height c)) (resolution c)))))
 
@@ -252,8 +265,10 @@ height generators of all of them."
                                       :resolution (resolution first)
                                       :origin-x (origin-x first) :origin-y (origin-y first)
                                       :cost-functions '()
-                                      :random-state (make-random-state
-                                                     (costmap-random-state first)))))
+                                      :random-state (let ((state (%random-state first)))
+                                                      (if (integerp state)
+                                                          state
+                                                          (make-random-state state))))))
           (dolist (c costmaps merged)
             (loop for (name fn score) in (cost-functions c)
                   do (register-cost-function merged fn name score))
