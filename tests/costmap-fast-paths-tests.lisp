@@ -5,27 +5,23 @@
 
 (in-suite costmap)
 
-(defun every-ray-verdicts (costmap matrix region stride height world goals handle)
-  "Per block of the LINE-OF-SIGHT grid evaluation, whether enough of the rays to all GOALS are
+(defun every-ray-verdicts (costmap window r0 c0 stride height world goals handle)
+  "Per block of the LINE-OF-SIGHT grid evaluation of WINDOW (the costmap's cells from (R0 C0)
+on): its first row and column in WINDOW and whether enough of the rays to all GOALS are
 clear, every ray cast: the verdicts without the early stop."
-  (destructuring-bind (r0 r1 c0 c1) region
-    (multiple-value-bind (rows columns) (costmap::sight-blocks matrix r0 r1 c0 c1 stride)
-      (let* ((n (length rows))
-             (eyes (make-array (* 3 n) :element-type 'double-float))
-             (all (make-array n :element-type 'fixnum)))
-        (dotimes (b n)
-          (setf (aref eyes (* 3 b)) (costmap::cell-center-x costmap (+ (aref columns b) (* 0.5d0 (1- stride))))
-                (aref eyes (+ 1 (* 3 b))) (costmap::cell-center-y costmap (+ (aref rows b) (* 0.5d0 (1- stride))))
-                (aref eyes (+ 2 (* 3 b))) height
-                (aref all b) b))
-        (let ((counts (make-list n :initial-element 0)))
-          (dolist (goal goals)
-            (let ((clear (costmap::clear-sight world eyes all n goal handle)))
-              (setf counts (loop for c in counts for j from 0 collect (+ c (aref clear j))))))
-          (loop for c in counts
-                for b from 0
-                collect (list (aref rows b) (aref columns b)
-                              (costmap::enough-points-seen-p c (length goals)))))))))
+  (multiple-value-bind (rows columns) (costmap::sight-blocks window stride)
+    (let* ((n (length rows))
+           (eyes (costmap::sight-eyes costmap rows columns r0 c0 stride height))
+           (all (make-array n :element-type 'fixnum))
+           (counts (make-list n :initial-element 0)))
+      (dotimes (b n) (setf (aref all b) b))
+      (dolist (goal goals)
+        (let ((clear (costmap::clear-sight world eyes all n goal handle)))
+          (setf counts (loop for c in counts for j from 0 collect (+ c (aref clear j))))))
+      (loop for c in counts
+            for b from 0
+            collect (list (aref rows b) (aref columns b)
+                          (costmap::enough-points-seen-p c (length goals)))))))
 
 (test line-of-sight-early-verdicts-are-every-ray-verdicts
   (in-kitchen
@@ -35,31 +31,28 @@ clear, every ray cast: the verdicts without the early stop."
            (handle (btr:object-handle mug))
            (world (costmap::world-without '(:pr2)))
            (costmap (costmap:make-location-costmap))
-           (region '(100 200 100 200))
+           (r0 100) (c0 100) (size 101)
            (stride 2) (height 1.3d0))
       (dolist (threshold '(0 0.3 0.5 0.9 1))
         (let ((btr:*visibility-threshold* threshold)
-              (matrix (make-array (list (costmap:costmap-rows costmap) (costmap:costmap-columns costmap))
-                                  :element-type 'double-float :initial-element 0d0)))
-          (destructuring-bind (r0 r1 c0 c1) region
-            ;; a ring of cells, as the range costs leave before the line of sight
-            (loop for r from r0 below r1
-                  do (loop for c from c0 below c1
-                           when (< 400 (+ (expt (- r 150) 2) (expt (- c 150) 2)) 2500)
-                             do (setf (aref matrix r c) 1d0)))
-            (let ((expected (every-ray-verdicts costmap matrix region stride height world goals handle)))
-              (costmap::clear-blocks-out-of-sight costmap matrix r0 r1 c0 c1 stride height world
-                                                  goals handle)
-              (is (< 0 (count-if #'third expected) (length expected))
-                  "some blocks see the mug and some do not (threshold ~a)" threshold)
-              (is (every (lambda (e)
-                           (destructuring-bind (br bc seen) e
-                             (eq seen (loop for r from br below (min r1 (+ br stride))
-                                            thereis (loop for c from bc below (min c1 (+ bc stride))
-                                                          thereis (> (aref matrix r c) 0d0))))))
-                         expected)
-                  "every block is kept exactly when every ray would see enough (threshold ~a)"
-                  threshold))))))))
+              (window (make-array (list size size) :element-type 'double-float :initial-element 0d0)))
+          ;; a ring of cells, as the range costs leave before the line of sight
+          (dotimes (r size)
+            (dotimes (c size)
+              (when (< 400 (+ (expt (- r 50) 2) (expt (- c 50) 2)) 2500)
+                (setf (aref window r c) 1d0))))
+          (let ((expected (every-ray-verdicts costmap window r0 c0 stride height world goals handle)))
+            (costmap::clear-blocks-out-of-sight costmap window r0 c0 stride height world goals handle)
+            (is (< 0 (count-if #'third expected) (length expected))
+                "some blocks see the mug and some do not (threshold ~a)" threshold)
+            (is (every (lambda (e)
+                         (destructuring-bind (br bc seen) e
+                           (eq seen (loop for r from br below (min size (+ br stride))
+                                          thereis (loop for c from bc below (min size (+ bc stride))
+                                                        thereis (> (aref window r c) 0d0))))))
+                       expected)
+                "every block is kept exactly when every ray would see enough (threshold ~a)"
+                threshold)))))))
 
 (test line-of-sight-p-agrees-with-every-ray
   (in-kitchen
@@ -146,3 +139,106 @@ clear, every ray cast: the verdicts without the early stop."
               (is (eq t same) "the closed drawer's grid"))
             (is (eq (grid) (grid)) "a grid asked for again comes from the cache")
             (is (<= (length costmap::*occupancy-cache*) costmap::*occupancy-cache-size*))))))))
+
+(defun cell-by-cell-grid (costmap)
+  "COSTMAP's grid computed the plain way: in the cells of its region, the product of its cost
+functions called at each centre, in the order they are applied, a cell that is 0 left alone."
+  (let ((grid (make-array (list (costmap:costmap-rows costmap) (costmap:costmap-columns costmap))
+                          :element-type 'double-float :initial-element 0d0)))
+    (multiple-value-bind (r0 r1 c0 c1)
+        (costmap::bounds->index-range costmap (costmap::costmap-support-bounds costmap))
+      (loop for r from r0 below r1
+            do (loop for c from c0 below c1
+                     do (let ((v 1d0)
+                              (x (costmap::cell-center-x costmap c))
+                              (y (costmap::cell-center-y costmap r)))
+                          (loop for (nil fn) in (costmap:cost-functions costmap)
+                                when (> v 0d0)
+                                  do (setf v (* v (float (funcall fn x y) 1d0))))
+                          (setf (aref grid r c) v)))))
+    grid))
+
+(test grid-evaluators-give-the-cost-functions-values
+  (let ((costmap (costmap:make-location-costmap :width 6 :height 5 :resolution 0.05
+                                                :origin-x -3 :origin-y -2.5))
+        (grid (costmap:make-occupancy-grid 6 5 -3 -2.5 0.05)))
+    (setf (aref (costmap:occupancy-bits grid) 40 50) 1
+          (aref (costmap:occupancy-bits grid) 41 50) 1)
+    (costmap:register-cost-function costmap (costmap:make-range-cost-function '(0.3 -0.2) 2.2) 'range 0)
+    (costmap:register-cost-function costmap (costmap:make-range-cost-function '(0.1 0.1) 0.4 :invert t)
+                                    'range-invert 1)
+    (costmap:register-cost-function costmap (costmap:make-occupancy-grid-cost-function grid) 'occupancy 1)
+    (costmap:register-cost-function costmap (costmap:make-gauss-cost-function '(0.5 0) '((0.3 0.1) (0.1 0.5)))
+                                    'gauss 2)
+    (costmap:register-cost-function costmap (costmap:make-rectangle-cost-function -1.7d0 -1.9d0 1.25d0 2d0)
+                                    'rectangle 3)
+    (costmap:register-cost-function costmap (lambda (x y) (+ 1 (* x x) (abs y))) 'plain 4)
+    (is (every (lambda (entry) (costmap::cost-function-grid-evaluator (second entry)))
+               (remove 'plain (costmap:cost-functions costmap) :key #'first))
+        "range, gauss, rectangle and occupancy fill the grid themselves")
+    (let ((same (equalp (cell-by-cell-grid costmap) (costmap::cost-grid costmap))))
+      (is (eq t same) "the grid is that of the functions called cell by cell"))
+    (is (< 1000 (costmap::positive-cells (costmap::cost-window costmap))) "many cells are not 0")))
+
+(test normalised-values-and-counts-without-the-normalised-grid
+  (let ((costmap (costmap:make-location-costmap :width 4 :height 4 :resolution 0.1
+                                                :origin-x -2 :origin-y -2)))
+    (costmap:register-cost-function costmap (costmap:make-range-cost-function '(0.5 0.2) 1.1) 'range 0)
+    (costmap:register-cost-function costmap (costmap:make-gauss-cost-function '(0.5 0.2) '((0.2 0) (0 0.2)))
+                                    'gauss 1)
+    (let ((fresh (costmap:make-location-costmap :width 4 :height 4 :resolution 0.1
+                                                :origin-x -2 :origin-y -2)))
+      (loop for (name fn score) in (costmap:cost-functions costmap)
+            do (costmap:register-cost-function fresh fn name score))
+      ;; values read before the normalised grid is made are the normalised grid's
+      (let ((values (loop for x from -2.5d0 to 2.5d0 by 0.13d0
+                          append (loop for y from -2.5d0 to 2.5d0 by 0.17d0
+                                       collect (costmap:get-map-value fresh x y))))
+            (grid (costmap:get-cost-map costmap)))
+        (is (equal values
+                   (loop for x from -2.5d0 to 2.5d0 by 0.13d0
+                         append (loop for y from -2.5d0 to 2.5d0 by 0.17d0
+                                      collect (let ((c (floor (+ x 2) 0.1d0)) (r (floor (+ y 2) 0.1d0)))
+                                                (if (and (< -1 r 40) (< -1 c 40)) (aref grid r c) 0d0))))))
+        (dolist (point '((0.5 0.2 0.85) (-1 -1 0.5) (1.9 1.9 3) (0 0 0)))
+          (destructuring-bind (x y radius) point
+            (is (= (loop for r below 40
+                         sum (loop for c below 40
+                                   count (and (plusp (aref grid r c))
+                                              (<= (+ (expt (- (costmap::cell-center-y costmap r) y) 2)
+                                                     (expt (- (costmap::cell-center-x costmap c) x) 2))
+                                                  (expt radius 2)))))
+                   (costmap:positive-cells-within fresh x y radius))
+                "cells above 0 within ~a of (~a ~a)" radius x y)))))
+    (signals error (costmap:positive-cells-within costmap 0 0 :far))
+    (let ((zero (costmap:make-location-costmap :width 1 :height 1 :resolution 0.1 :origin-x 0 :origin-y 0)))
+      (costmap:register-cost-function zero (constantly 0) 'zero)
+      (signals costmap:invalid-probability-distribution (costmap:positive-cells-within zero 0 0 1)))))
+
+(defvar *rule-padding* 0.25d0 "What the user's padding rule in the next test answers.")
+
+(defun rule-padding () *rule-padding*)
+
+(test metadata-from-rules-is-asked-each-time
+  (let ((package (make-package (format nil "COSTMAP-USER-RULES-~d" (random 1000000))
+                               :use '(:cl :prolog))))
+    (unwind-protect
+         (let ((padding (intern "COSTMAP-PADDING" package))
+               (group (intern "MY-PADDING" package))
+               (rob-int:*robot-name* :pr2))
+           (flet ((value () (costmap:costmap-metadata-value 'costmap:costmap-padding)))
+             (let ((before (value)))
+               (is (eql before (value)) "the robot's padding, from facts")
+               (is (costmap::metadata-from-facts-p 'costmap:costmap-padding))
+               (eval `(prolog:def-fact-group ,group ()
+                        (prolog:<- (,padding ?p) (prolog:lisp-fun rule-padding ?p))))
+               (is (not (costmap::metadata-from-facts-p 'costmap:costmap-padding)))
+               (is (eql 0.25d0 (value)))
+               (let ((*rule-padding* 0.35d0))
+                 (is (eql 0.35d0 (value)) "a rule is asked again, not remembered"))
+               (eval `(prolog:def-fact-group ,group () (prolog:<- (,padding 0.45d0))))
+               (is (eql 0.45d0 (value)) "the user's fact once the rule is gone")
+               (prolog:remove-fact-group group)
+               (is (eql before (value)) "the robot's padding again"))))
+      (ignore-errors (prolog:remove-fact-group (find-symbol "MY-PADDING" package)))
+      (delete-package package))))

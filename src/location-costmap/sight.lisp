@@ -92,41 +92,49 @@ body would block the rays cast from where it is going to stand."
       (when (btr:object copy name)
         (btr:remove-object copy name)))))
 
-(defun sight-blocks (matrix r0 r1 c0 c1 stride)
-  "(values rows columns): the first rows and columns of the STRIDE x STRIDE blocks of the
-cells R0..R1, C0..C1 of MATRIX (end exclusive) that have a cell above 0, row by row."
-  (declare (type (simple-array double-float (* *)) matrix) (type fixnum r0 r1 c0 c1 stride)
-           (optimize speed))
-  (let ((rows '()) (columns '()))
-    (loop for br of-type fixnum from r0 below r1 by stride
-          do (loop for bc of-type fixnum from c0 below c1 by stride
-                   when (loop for r of-type fixnum from br below (min r1 (+ br stride))
-                                thereis (loop for c of-type fixnum from bc below (min c1 (+ bc stride))
-                                                thereis (> (aref matrix r c) 0d0)))
+(defun sight-blocks (window stride)
+  "(values rows columns): the first rows and columns of the STRIDE x STRIDE blocks of WINDOW
+\(from its cell (0 0) on) that have a cell above 0, row by row."
+  (declare (type (simple-array double-float (* *)) window) (type fixnum stride) (optimize speed))
+  (let ((rows '()) (columns '())
+        (n-rows (array-dimension window 0)) (n-columns (array-dimension window 1)))
+    (loop for br of-type fixnum from 0 below n-rows by stride
+          do (loop for bc of-type fixnum from 0 below n-columns by stride
+                   when (loop for r of-type fixnum from br below (min n-rows (+ br stride))
+                                thereis (loop for c of-type fixnum from bc below (min n-columns (+ bc stride))
+                                                thereis (> (aref window r c) 0d0)))
                      do (push br rows) (push bc columns)))
     (values (coerce (nreverse rows) '(simple-array fixnum (*)))
             (coerce (nreverse columns) '(simple-array fixnum (*))))))
 
-(defun clear-blocks-out-of-sight (costmap matrix r0 r1 c0 c1 stride height world goals handle)
-  "Set to 0 the STRIDE x STRIDE blocks of MATRIX (cells R0..R1, C0..C1, end exclusive) that
+(defun sight-eyes (costmap rows columns r0 c0 stride height)
+  "The eyes (a flat double vector, 3 per block) at the centres of the blocks of the costmap's
+cells whose first rows and columns are ROWS and COLUMNS counted from cell (R0 C0), at HEIGHT."
+  (declare (type (simple-array fixnum (*)) rows columns) (type fixnum r0 c0 stride))
+  (let* ((n (length rows))
+         (eyes (make-array (* 3 n) :element-type 'double-float)))
+    (dotimes (b n eyes)
+      (setf (aref eyes (* 3 b)) (cell-center-x costmap (+ (+ c0 (aref columns b)) (* 0.5d0 (1- stride))))
+            (aref eyes (+ 1 (* 3 b))) (cell-center-y costmap (+ (+ r0 (aref rows b)) (* 0.5d0 (1- stride))))
+            (aref eyes (+ 2 (* 3 b))) height))))
+
+(defun clear-blocks-out-of-sight (costmap window r0 c0 stride height world goals handle)
+  "Set to 0 the STRIDE x STRIDE blocks of WINDOW (the costmap's cells from (R0 C0) on) that
 have a cell above 0 and from whose centre, at HEIGHT, too few of GOALS are seen
 \(ENOUGH-POINTS-SEEN-P).  The rays go to one goal at a time, from the blocks whose verdict is
 still open."
-  (declare (type (simple-array double-float (* *)) matrix) (type fixnum r0 r1 c0 c1 stride))
-  (multiple-value-bind (rows columns) (sight-blocks matrix r0 r1 c0 c1 stride)
+  (declare (type (simple-array double-float (* *)) window) (type fixnum r0 c0 stride))
+  (multiple-value-bind (rows columns) (sight-blocks window stride)
     (declare (type (simple-array fixnum (*)) rows columns))
     (let* ((n (length rows))
-           (eyes (make-array (* 3 n) :element-type 'double-float))
+           (eyes (sight-eyes costmap rows columns r0 c0 stride height))
            (seen (make-array n :element-type 'fixnum :initial-element 0))
            (open (make-array n :element-type 'fixnum))
            (open-count n)
-           (need (points-needed (length goals))))
+           (need (points-needed (length goals)))
+           (n-rows (array-dimension window 0)) (n-columns (array-dimension window 1)))
       (declare (type fixnum open-count need))
-      (dotimes (b n)
-        (setf (aref eyes (* 3 b)) (cell-center-x costmap (+ (aref columns b) (* 0.5d0 (1- stride))))
-              (aref eyes (+ 1 (* 3 b))) (cell-center-y costmap (+ (aref rows b) (* 0.5d0 (1- stride))))
-              (aref eyes (+ 2 (* 3 b))) height
-              (aref open b) b))
+      (dotimes (b n) (setf (aref open b) b))
       (loop for goal in goals
             for left of-type fixnum downfrom (1- (length goals))
             while (plusp open-count)
@@ -143,9 +151,9 @@ still open."
       (dotimes (b n)
         (when (< (aref seen b) need)
           (let ((br (aref rows b)) (bc (aref columns b)))
-            (loop for r of-type fixnum from br below (min r1 (+ br stride))
-                  do (loop for c of-type fixnum from bc below (min c1 (+ bc stride))
-                           do (setf (aref matrix r c) 0d0)))))))))
+            (loop for r of-type fixnum from br below (min n-rows (+ br stride))
+                  do (loop for c of-type fixnum from bc below (min n-columns (+ bc stride))
+                           do (setf (aref window r c) 0d0)))))))))
 
 (defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
                                                                    target-object (stride 2)
@@ -169,8 +177,9 @@ that are not zero yet, casting a ray to a point only while the block's verdict i
        (if (eye-sees-p world x y h goals handle) 1d0 0d0))
      :name 'line-of-sight
      :grid-evaluator
-     (lambda (costmap matrix r0 r1 c0 c1)
-       (clear-blocks-out-of-sight costmap matrix r0 r1 c0 c1 stride h world goals handle)))))
+     (lambda (costmap window r0 r1 c0 c1)
+       (declare (ignore r1 c1))
+       (clear-blocks-out-of-sight costmap window r0 c0 stride h world goals handle)))))
 
 (defun view-target-points (target target-object)
   "The points a line of sight must reach to see TARGET: TARGET itself, and for an object the
