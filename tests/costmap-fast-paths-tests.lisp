@@ -242,3 +242,28 @@ functions called at each centre, in the order they are applied, a cell that is 0
                (is (eql before (value)) "the robot's padding again"))))
       (ignore-errors (prolog:remove-fact-group (find-symbol "MY-PADDING" package)))
       (delete-package package))))
+
+(test kitchen-restricted-area-is-the-same-for-any-reals
+  (flet ((area (x y)
+           ;; the area as documented, compared as Common Lisp compares reals
+           (cond ((> x 1.2d0) 0d0)
+                 ((and (> x 0.5d0) (< -1.5d0 y 2d0)) 1d0)
+                 ((and (> x 0d0) (< -1.5d0 y 1d0)) 1d0)
+                 ((and (> x -1.5d0) (< -1.5d0 y 2.5d0)) 1d0)
+                 ((and (> x -4d0) (< -1d0 y 1d0)) 1d0)
+                 (t 0d0))))
+    (let ((mismatches '()) (values '()))
+      (loop for x from -4.5d0 to 1.5d0 by 0.05d0
+            do (loop for y from -2d0 to 3d0 by 0.05d0
+                     do (dolist (point (list (list x y) (list (rational x) (rational y))
+                                             (list (float x 1f0) (float y 1f0))))
+                          (destructuring-bind (px py) point
+                            (let ((v (costmap:kitchen-restricted-area px py)))
+                              (push v values)
+                              (unless (eql v (area px py)) (push point mismatches)))))))
+      ;; the boundaries themselves, as doubles and as the rationals just beside them
+      (dolist (point '((1.2d0 0d0) (0.5d0 2d0) (6/5 0) (1/2 19/10) (0d0 -1.5d0) (-4d0 0d0)))
+        (destructuring-bind (px py) point
+          (unless (eql (costmap:kitchen-restricted-area px py) (area px py)) (push point mismatches))))
+      (is (null mismatches) "points where the area differs: ~s" mismatches)
+      (is (and (member 0d0 values) (member 1d0 values) t)))))
