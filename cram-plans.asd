@@ -201,6 +201,7 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "values")
                (:file "functions")
                (:file "belief")
+               (:file "sight")
                (:file "targets")
                (:file "designators")
                (:file "household-bodies")
@@ -547,7 +548,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "costmap-tests")
                (:file "costmap-kitchen-tests")
-               (:file "costmap-api-tests")))
+               (:file "costmap-api-tests")
+               (:file "costmap-fast-paths-tests")))
 
 (defsystem "cram-plans/tests/bad-input"
   :description "The table-driven bad-input suite of every layer a user touches."

@@ -133,6 +133,24 @@ Returns a list with one entry per ray: NIL for no hit, or (object link fraction 
                                  (subseq out (+ 1 (* 7 i)) (+ 4 (* 7 i)))
                                  (subseq out (+ 4 (* 7 i)) (+ 7 (* 7 i))))))))))
 
+(defun ray-hit-objects (world from to)
+  "Cast rays FROM[i] -> TO[i] as RAY-TEST does, FROM and TO flat DVECs of 3n; a vector of n
+\(signed-byte 32), the handle of the object each ray hits first, -1 where it hits nothing.
+For many rays whose hit points and normals nobody asks for (line-of-sight tests)."
+  (unless (and (typep from 'dvec) (typep to 'dvec) (= (length from) (length to))
+               (zerop (mod (length from) 3)))
+    (arg-error 'ray-hit-objects "ray starts ~s and ends ~s, expected double-float vectors of ~
+                                 equal length, a multiple of 3" from to))
+  (let* ((n (floor (length from) 3))
+         (objects (make-array n :element-type '(signed-byte 32))))
+    (when (plusp n)
+      (let ((hits (make-array (* 2 n) :element-type '(signed-byte 32)))
+            (out (make-dvec (* 7 n))))
+        (with-vector-pointers ((pf from) (pg to) (ph hits) (po out))
+          (ccall "cn_ray_test" world pf pg n ph po))
+        (dotimes (i n) (setf (aref objects i) (aref hits (* 2 i))))))
+    objects))
+
 (defun attach (world object parent &key (link -1) loose)
   "Attach body OBJECT to PARENT (LINK of an articulated object, or a body with LINK -1).
 Rigid (LOOSE nil): OBJECT keeps its pose relative to the link and follows it; loose: only

@@ -26,6 +26,7 @@
    #:robot-link-pose #:set-robot-self-collision
    ;; queries
    #:world-contacts #:object-contacts #:object-first-contact #:closest-distance #:ignore-pair #:ray-test
+   #:ray-hit-objects
    #:attach #:detach #:attachments
    ;; rendering
    #:render #:render-png #:write-png #:look-at #:visibility

@@ -57,6 +57,22 @@
         (is (= r (first h4)))
         (is (= (robot-link-index w r "lower") (second h4)))))))
 
+(test ray-hit-objects-are-ray-test-hits
+  (with-world (w)
+    (let* ((plane (add-plane w))
+           (box (add-box w '(2 0 0.5 0 0 0 1) '(1 1 1)))
+           (from '((0 0 5) (2 0 5) (0 0 5) (2 3 5)))
+           (to '((0 0 -1) (2 0 -1) (0 0 6) (2 0 0.6)))
+           (flat (lambda (points) (coerce (mapcar (lambda (x) (float x 1d0)) (apply #'append points))
+                                          '(simple-array double-float (*))))))
+      (let ((objects (ray-hit-objects w (funcall flat from) (funcall flat to))))
+        (is (equalp (vector plane box -1 box) objects))
+        (is (equal (mapcar (lambda (hit) (if hit (first hit) -1)) (ray-test w from to))
+                   (coerce objects 'list))))
+      (is (= 0 (length (ray-hit-objects w (funcall flat '()) (funcall flat '())))))
+      (signals error (ray-hit-objects w (funcall flat '((0 0 1))) (funcall flat '())))
+      (signals error (ray-hit-objects w '(0 0 1) '(0 0 2))))))
+
 (test attachments-follow-link
   (with-world (w)
     (let* ((r (add-urdf w *arm-urdf*))

@@ -45,22 +45,14 @@ and not kept."
   (unwind-protect
        (let* ((costmap (handler-case (costmap:designator-costmap location)
                          (desig:designator-error () nil)))
-              (grid (and costmap (handler-case (costmap:get-cost-map costmap)
-                                   (costmap:invalid-probability-distribution () nil)))))
-         (if (null grid)
+              (cells (and costmap
+                          (handler-case (costmap:positive-cells-within
+                                         costmap (cl-transforms:x base) (cl-transforms:y base)
+                                         *room-reach*)
+                            (costmap:invalid-probability-distribution () nil)))))
+         (if (null cells)
              0d0
-             (let ((bx (cl-transforms:x base)) (by (cl-transforms:y base))
-                   (reach2 (expt *room-reach* 2)))
-               (* (expt (costmap:resolution costmap) 2)
-                  (loop for row below (array-dimension grid 0)
-                        for dy2 = (expt (- (costmap::cell-center-y costmap row) by) 2)
-                        sum (if (> dy2 reach2)
-                                0
-                                (loop for column below (array-dimension grid 1)
-                                      count (and (plusp (aref grid row column))
-                                                 (<= (+ dy2 (expt (- (costmap::cell-center-x
-                                                                      costmap column) bx) 2))
-                                                     reach2)))))))))
+             (* (expt (costmap:resolution costmap) 2) cells)))
     (costmap:forget-designator-costmap location)))
 
 (defun room-left (object candidate)

@@ -1,5 +1,5 @@
 ;;;; Costmaps from the Bullet belief state: occupancy of the environment's static geometry,
-;;;; line of sight by ray casts, base poses in collision.
+;;;; base poses in collision (line of sight: sight.lisp).
 
 (in-package :cram-location-costmap)
 
@@ -10,9 +10,12 @@
   "Geometry above this height (metres) does not block the robot base.")
 
 (defvar *occupancy-cache* '()
-  "Recently rasterised occupancy grids: a list of (key . grid), newest first.")
+  "Recently used occupancy grids: a list of (key . grid), the most recently used first.")
 
-(defparameter *occupancy-cache-size* 8 "How many occupancy grids *OCCUPANCY-CACHE* keeps.")
+(defparameter *occupancy-cache-size* 32
+  "How many occupancy grids *OCCUPANCY-CACHE* keeps (each some 11 kB for the PR2's 300 x 300
+cells): a household run opens and closes a dozen drawers and doors and asks for grids of two
+paddings in each state.")
 
 (defun vector-key (pose)
   (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
@@ -207,7 +210,9 @@ metadata.  Grids are cached per environment pose and joint state."
                              environments)))
          (cached (assoc key *occupancy-cache* :test #'equalp)))
     (if cached
-        (cdr cached)
+        (progn (unless (eq cached (first *occupancy-cache*))
+                 (setf *occupancy-cache* (cons cached (remove cached *occupancy-cache* :test #'eq))))
+               (cdr cached))
         (let* ((grid (make-occupancy-grid width height origin-x origin-y resolution))
                (bits (occupancy-bits grid)))
           (dolist (env environments)
@@ -232,144 +237,6 @@ metadata.  Grids are cached per environment pose and joint state."
           (when (> (length *occupancy-cache*) *occupancy-cache-size*)
             (setf *occupancy-cache* (subseq *occupancy-cache* 0 *occupancy-cache-size*)))
           grid))))
-
-;;; ---- line of sight ---------------------------------------------------------------------------------
-
-(defun cast-rays (world from to)
-  "Cast rays from the flat double vectors FROM to TO (3 per ray) in WORLD; the list of hits."
-  (cram-native:ray-test (btr:world-handle world) from to))
-
-;;; Rays stop *LINE-OF-SIGHT-TOLERANCE* short of their target: what lies that close to the
-;;; target (the surface it rests on, the target's own body) does not block the view, and the
-;;; rays do not have to be tested against the target's shape.
-
-(defparameter *line-of-sight-tolerance* 0.08d0
-  "Rays of a line-of-sight test end this many metres before their target point.")
-
-(defun object-handle-of (object)
-  (and object (btr:object-handle object)))
-
-(defun sight-rays (eyes target)
-  "Flat double vectors FROM and TO of the rays from the EYES (a list of (x y z) double lists)
-to TARGET (x y z), each shortened by *LINE-OF-SIGHT-TOLERANCE*."
-  (let* ((n (length eyes))
-         (from (make-array (* 3 n) :element-type 'double-float))
-         (to (make-array (* 3 n) :element-type 'double-float)))
-    (loop for (ex ey ez) in eyes for i from 0
-          do (destructuring-bind (tx ty tz) target
-               (let* ((dx (- tx ex)) (dy (- ty ey)) (dz (- tz ez))
-                      (len (sqrt (+ (* dx dx) (* dy dy) (* dz dz))))
-                      (k (if (> len *line-of-sight-tolerance*)
-                             (- 1d0 (/ *line-of-sight-tolerance* len))
-                             0d0)))
-                 (setf (aref from (* 3 i)) ex (aref from (+ 1 (* 3 i))) ey (aref from (+ 2 (* 3 i))) ez
-                       (aref to (* 3 i)) (+ ex (* k dx)) (aref to (+ 1 (* 3 i))) (+ ey (* k dy))
-                       (aref to (+ 2 (* 3 i))) (+ ez (* k dz))))))
-    (values from to)))
-
-(defun rays-clear (world eyes target target-handle)
-  "For each of EYES, true when its shortened ray to TARGET hits nothing in WORLD but the object
-with TARGET-HANDLE."
-  (if (null eyes)
-      '()
-      (multiple-value-bind (from to) (sight-rays eyes target)
-        (mapcar (lambda (hit) (or (null hit) (and target-handle (= (first hit) target-handle))))
-                (cast-rays world from to)))))
-
-(defun xyz (point)
-  (list (coerce (cl-transforms:x point) 'double-float) (coerce (cl-transforms:y point) 'double-float)
-        (coerce (cl-transforms:z point) 'double-float)))
-
-(defun world-without (names &optional (world btr:*current-bullet-world*))
-  "A copy of WORLD without the objects NAMES (those WORLD has), e.g. without the robot whose
-body would block the rays cast from where it is going to stand."
-  (let ((copy (btr:copy-world world)))
-    (dolist (name names copy)
-      (when (btr:object copy name)
-        (btr:remove-object copy name)))))
-
-(defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
-                                                                   target-object (stride 2)
-                                                                   ignore-objects
-                                                                   (points (list target)))
-  "A cost function that is 1 at the map points from which enough of the rays at CAMERA-HEIGHT
-to POINTS (3D points; default TARGET alone; ENOUGH-POINTS-SEEN-P) reach them (or
-TARGET-OBJECT) unobstructed in WORLD, else 0; the objects named IGNORE-OBJECTS (e.g. the robot) do not block.  On a grid it casts
-one ray per point and STRIDE x STRIDE block of cells that are not zero yet."
-  (unless (typep stride '(integer 1 64))
-    (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
-  (unless (and (realp camera-height) (< (abs camera-height) 1d3))
-    (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: camera height ~s, expected a real." camera-height))
-  (let* ((world (if ignore-objects (world-without ignore-objects world) world))
-         (goals (progn (xyz target) (mapcar #'xyz points)))
-         (h (coerce camera-height 'double-float))
-         (handle (object-handle-of target-object)))
-    (make-cost-function
-     (lambda (x y)
-       (let ((eye (list (list (float x 1d0) (float y 1d0) h))))
-         (if (enough-points-seen-p (count-if (lambda (goal) (first (rays-clear world eye goal handle)))
-                                             goals)
-                                   (length goals))
-             1d0 0d0)))
-     :name 'line-of-sight
-     :grid-evaluator
-     (lambda (costmap matrix r0 r1 c0 c1)
-       (declare (type (simple-array double-float (* *)) matrix))
-       (let ((blocks '()))
-         (loop for br from r0 below r1 by stride
-               do (loop for bc from c0 below c1 by stride
-                        when (loop for r from br below (min r1 (+ br stride))
-                                     thereis (loop for c from bc below (min c1 (+ bc stride))
-                                                     thereis (> (aref matrix r c) 0d0)))
-                          do (push (cons br bc) blocks)))
-         (setf blocks (nreverse blocks))
-         (loop with eyes = (loop for (br . bc) in blocks
-                                 collect (list (cell-center-x costmap (+ bc (* 0.5d0 (1- stride))))
-                                               (cell-center-y costmap (+ br (* 0.5d0 (1- stride))))
-                                               h))
-               with seen = (let ((counts (make-list (length blocks) :initial-element 0)))
-                             (dolist (goal goals counts)
-                               (setf counts (mapcar (lambda (n clear) (if clear (1+ n) n))
-                                                    counts (rays-clear world eyes goal handle)))))
-               for (br . bc) in blocks
-               for n in seen
-               unless (enough-points-seen-p n (length goals))
-                 do (loop for r from br below (min r1 (+ br stride))
-                          do (loop for c from bc below (min c1 (+ bc stride))
-                                   do (setf (aref matrix r c) 0d0)))))))))
-
-(defun view-target-points (target target-object)
-  "The points a line of sight must reach to see TARGET: TARGET itself, and for an object the
-centre and top of its bounding box and the middles of its four vertical sides."
-  (if (null target-object)
-      (list target)
-      (multiple-value-bind (lo hi) (btr:aabb target-object)
-        (let* ((cx (/ (+ (cl-transforms:x lo) (cl-transforms:x hi)) 2))
-               (cy (/ (+ (cl-transforms:y lo) (cl-transforms:y hi)) 2))
-               (cz (/ (+ (cl-transforms:z lo) (cl-transforms:z hi)) 2))
-               (sx (* 0.4d0 (- (cl-transforms:x hi) (cl-transforms:x lo))))
-               (sy (* 0.4d0 (- (cl-transforms:y hi) (cl-transforms:y lo))))
-               (top (- (cl-transforms:z hi) (* 0.1d0 (- (cl-transforms:z hi) (cl-transforms:z lo))))))
-          (list (cl-transforms:make-3d-vector cx cy cz)
-                (cl-transforms:make-3d-vector cx cy top)
-                (cl-transforms:make-3d-vector (- cx sx) cy cz)
-                (cl-transforms:make-3d-vector (+ cx sx) cy cz)
-                (cl-transforms:make-3d-vector cx (- cy sy) cz)
-                (cl-transforms:make-3d-vector cx (+ cy sy) cz))))))
-
-(defun enough-points-seen-p (count total)
-  "True when COUNT of TOTAL view target points seen make the object seen: the share of them
-BTR:*VISIBILITY-THRESHOLD* asks of an object's visible part (at least one; all of a single
-point)."
-  (>= count (max 1 (ceiling (* (min 1 (max 0 btr:*visibility-threshold*)) total)))))
-
-(defun line-of-sight-p (eye points target-object &key (world btr:*current-bullet-world*))
-  "True when enough of the rays from EYE (a 3D point) to POINTS (ENOUGH-POINTS-SEEN-P) reach
-their point (up to *LINE-OF-SIGHT-TOLERANCE*), or TARGET-OBJECT, unobstructed in WORLD."
-  (let ((e (xyz eye)) (handle (object-handle-of target-object)))
-    (enough-points-seen-p (count-if (lambda (p) (first (rays-clear world (list e) (xyz p) handle)))
-                                    points)
-                          (length points))))
 
 ;;; ---- robot base poses in collision -------------------------------------------------------------------
 

@@ -23,6 +23,30 @@
 
 ;;; ---- gaussian and range ------------------------------------------------------------------------
 
+(defmacro cell-evaluator ((x y) &body value)
+  "A grid evaluator (see MAKE-COST-FUNCTION) that multiplies each cell above 0 by VALUE, a
+double-float computed from the cell centre X and Y (double-floats) as the cost function
+computes it for that centre: the cost function's values without a call per cell."
+  (let ((costmap (gensym "COSTMAP")) (window (gensym "WINDOW")) (xs (gensym "XS"))
+        (r0 (gensym "R0")) (r1 (gensym "R1")) (c0 (gensym "C0")) (c1 (gensym "C1"))
+        (r (gensym "R")) (c (gensym "C")) (wr (gensym "WR")) (wc (gensym "WC")) (w (gensym "W")))
+    `(lambda (,costmap ,window ,r0 ,r1 ,c0 ,c1)
+       (declare (type (simple-array double-float (* *)) ,window) (type fixnum ,r0 ,r1 ,c0 ,c1))
+       (let ((,xs (make-array (max 0 (- ,c1 ,c0)) :element-type 'double-float)))
+         (loop for ,c from ,c0 below ,c1
+               do (setf (aref ,xs (- ,c ,c0)) (cell-center-x ,costmap ,c)))
+         (loop for ,r of-type fixnum from ,r0 below ,r1
+               for ,wr of-type fixnum from 0
+               for ,y of-type double-float = (cell-center-y ,costmap ,r)
+               do (locally (declare (optimize speed))
+                    (dotimes (,wc (- ,c1 ,c0))
+                      (let ((,w (aref ,window ,wr ,wc)))
+                        (when (> ,w 0d0)
+                          (let ((,x (aref ,xs ,wc)))
+                            (declare (type double-float ,x))
+                            (setf (aref ,window ,wr ,wc)
+                                  (* ,w (the double-float (progn ,@value))))))))))))))
+
 (defun covariance-entries (covariance)
   "(values sxx sxy syy) of COVARIANCE: ((sxx sxy) (syx syy)) or a 2x2 array."
   (flet ((entry (r c)
@@ -53,14 +77,17 @@ from MEAN along x or y."
                (norm (/ 1d0 (* 2 pi (sqrt det))))
                (dx (* 4 (sqrt sxx))) (dy (* 4 (sqrt syy))))
           (declare (type double-float ixx ixy iyy norm))
-          (make-cost-function
-           (lambda (x y)
-             (declare (optimize speed))
-             (let ((a (- (float x 1d0) mx)) (b (- (float y 1d0) my)))
-               (declare (type double-float a b))
-               (* norm (exp (min 0d0 (* -0.5d0 (+ (* ixx a a) (* 2 ixy a b) (* iyy b b))))))))
-           :name 'gauss
-           :bounds (list (- mx dx) (- my dy) (+ mx dx) (+ my dy))))))))
+          (flet ((value (x y)
+                   (declare (type double-float x y) (optimize speed))
+                   (let ((a (- x mx)) (b (- y my)))
+                     (declare (type double-float a b))
+                     (* norm (exp (min 0d0 (* -0.5d0 (+ (* ixx a a) (* 2 ixy a b) (* iyy b b)))))))))
+            (declare (inline value))
+            (make-cost-function
+             (lambda (x y) (value (float x 1d0) (float y 1d0)))
+             :name 'gauss
+             :bounds (list (- mx dx) (- my dy) (+ mx dx) (+ my dy))
+             :grid-evaluator (cell-evaluator (x y) (value x y)))))))))
 
 (defun make-range-cost-function (point distance &key invert)
   "A cost function that is 1 within DISTANCE metres (horizontally) of POINT and 0 farther;
@@ -68,16 +95,19 @@ with INVERT, 0 within DISTANCE and 1 farther."
   (multiple-value-bind (px py) (point-xy point "MAKE-RANGE-COST-FUNCTION point")
     (unless (and (finite-real-p distance) (>= distance 0) (< distance 1d6))
       (error "MAKE-RANGE-COST-FUNCTION: the distance is ~s, expected a non-negative real." distance))
-    (let* ((d (to-double distance)) (d2 (* d d)))
-      (declare (type double-float d2 px py))
-      (make-cost-function
-       (lambda (x y)
-         (declare (optimize speed))
-         (let* ((dx (- (float x 1d0) px)) (dy (- (float y 1d0) py))
-                (inside (<= (+ (* dx dx) (* dy dy)) d2)))
-           (if (if invert (not inside) inside) 1d0 0d0)))
-       :name (if invert 'range-invert 'range)
-       :bounds (unless invert (list (- px d) (- py d) (+ px d) (+ py d)))))))
+    (let* ((d (to-double distance)) (d2 (* d d))
+           (in (if invert 0d0 1d0)) (out (if invert 1d0 0d0)))
+      (declare (type double-float d2 px py in out))
+      (flet ((value (x y)
+               (declare (type double-float x y) (optimize speed))
+               (let ((dx (- x px)) (dy (- y py)))
+                 (if (<= (+ (* dx dx) (* dy dy)) d2) in out))))
+        (declare (inline value))
+        (make-cost-function
+         (lambda (x y) (value (float x 1d0) (float y 1d0)))
+         :name (if invert 'range-invert 'range)
+         :bounds (unless invert (list (- px d) (- py d) (+ px d) (+ py d)))
+         :grid-evaluator (cell-evaluator (x y) (value x y)))))))
 
 (defun make-axis-boundary-cost-function (axis boundary predicate)
   "A cost function that is 1 where (PREDICATE coordinate BOUNDARY) holds for the :X or :Y
@@ -102,7 +132,13 @@ coordinate AXIS, else 0; with PREDICATE #'< or #'> it knows its half-plane."
     (error "MAKE-RECTANGLE-COST-FUNCTION: (~s ~s ~s ~s) is not a rectangle x-min y-min x-max y-max."
            x-min y-min x-max y-max))
   (make-cost-function (lambda (x y) (if (and (<= x-min x x-max) (<= y-min y y-max)) 1d0 0d0))
-                      :name 'rectangle :bounds (list x-min y-min x-max y-max)))
+                      :name 'rectangle :bounds (list x-min y-min x-max y-max)
+                      :grid-evaluator
+                      (when (every (lambda (v) (typep v 'double-float)) (list x-min y-min x-max y-max))
+                        (let ((x-min x-min) (y-min y-min) (x-max x-max) (y-max y-max))
+                          (declare (type double-float x-min y-min x-max y-max))
+                          (cell-evaluator (x y)
+                            (if (and (<= x-min x x-max) (<= y-min y y-max)) 1d0 0d0))))))
 
 (defun make-matrix-cost-function (origin-x origin-y resolution matrix)
   "A cost function reading the 2D array MATRIX (row = y index, column = x index) whose cell
@@ -259,19 +295,22 @@ centre are 1: the disk by which obstacles grow."
        #'value
        :name 'occupancy
        :grid-evaluator
-       (lambda (costmap matrix r0 r1 c0 c1)
-         (declare (type (simple-array double-float (* *)) matrix))
+       (lambda (costmap window r0 r1 c0 c1)
+         (declare (type (simple-array double-float (* *)) window) (type fixnum r0 r1 c0 c1))
          (if (and (= (resolution costmap) (resolution grid))
                   (= (origin-x costmap) (origin-x grid)) (= (origin-y costmap) (origin-y grid))
-                  (equal (array-dimensions bits) (array-dimensions matrix)))
-             (loop for r from r0 below r1
-                   do (loop for c from c0 below c1
-                            when (eq (= 1 (aref bits r c)) (not invert))
-                              do (setf (aref matrix r c) 0d0)))
+                  (equal (array-dimensions bits)
+                         (list (costmap-rows costmap) (costmap-columns costmap))))
+             (let ((blocked (if invert 0 1)))
+               (declare (type bit blocked))
+               (loop for r of-type fixnum from r0 below r1
+                     do (loop for c of-type fixnum from c0 below c1
+                              when (= blocked (aref bits r c))
+                                do (setf (aref window (- r r0) (- c c0)) 0d0))))
              (loop for r from r0 below r1
                    for y = (cell-center-y costmap r)
                    do (loop for c from c0 below c1
-                            when (> (aref matrix r c) 0d0)
-                              do (setf (aref matrix r c)
-                                       (* (aref matrix r c)
+                            when (> (aref window (- r r0) (- c c0)) 0d0)
+                              do (setf (aref window (- r r0) (- c c0))
+                                       (* (aref window (- r r0) (- c c0))
                                           (value (cell-center-x costmap c) y)))))))))))

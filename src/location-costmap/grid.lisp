@@ -41,23 +41,52 @@ function produced a negative or non-finite value."))
 
 ;;; ---- metadata ---------------------------------------------------------------------------------
 
+(defparameter *metadata-variables* '(?v0 ?v1 ?v2 ?v3)
+  "The variables of the metadata queries: ?V0 for the first value, and so on.")
+
+(defun metadata-variables (arity)
+  (if (<= arity (length *metadata-variables*))
+      (subseq *metadata-variables* 0 arity)
+      (loop for i below arity collect (intern (format nil "?V~d" i) :cram-location-costmap))))
+
+(defvar *metadata-answers* (make-hash-table :test 'equal :synchronized t)
+  "(predicate arity robot-name) -> (generation . values): the first answers of metadata
+predicates that come from facts (METADATA-FROM-FACTS-P); :NONE for no answer.")
+
+(defun metadata-answer (predicate arity)
+  "The values of the first solution of (PREDICATE ?V0 ...) with ARITY variables, or :NONE;
+kept while the answer comes from facts and the database and the current robot are the same."
+  (flet ((ask ()
+           (let* ((vars (metadata-variables arity))
+                  (solution (cut:lazy-car (prolog `(,predicate ,@vars)))))
+             (if solution (mapcar (lambda (v) (cut:var-value v solution)) vars) :none))))
+    (if (or *reading-user-metadata* (not (metadata-from-facts-p predicate)))
+        (ask)
+        (let* ((key (list predicate arity rob-int:*robot-name*))
+               (generation (prolog:database-generation))
+               (cached (gethash key *metadata-answers*)))
+          (if (and cached (eql (car cached) generation))
+              (cdr cached)
+              (let ((values (ask)))
+                (setf (gethash key *metadata-answers*) (cons generation values))
+                values))))))
+
 (defun costmap-metadata-value (predicate &key (arity 1) (default nil default-p))
   "The first solution of the metadata PREDICATE (a symbol such as COSTMAP-PADDING) as one
 value, or as a list of ARITY values when ARITY > 1.  Without a solution, DEFAULT when given,
-else an error naming the predicate."
-  (let* ((vars (loop for i below arity collect (intern (format nil "?V~d" i) :cram-location-costmap)))
-         (solution (cut:lazy-car (prolog `(,predicate ,@vars)))))
-    (cond (solution
-           (let ((values (mapcar (lambda (v) (cut:var-value v solution)) vars)))
-             (dolist (v values)
-               (unless (realp v)
-                 (error "Costmap metadata (~(~a~) ...) gave ~s, expected real numbers."
-                        predicate values)))
-             (if (= arity 1) (first values) values)))
+else an error naming the predicate.  An answer that comes from facts is kept until the Prolog
+database or the current robot change (METADATA-FROM-FACTS-P)."
+  (let ((values (metadata-answer predicate arity)))
+    (cond ((listp values)
+           (dolist (v values)
+             (unless (realp v)
+               (error "Costmap metadata (~(~a~) ...) gave ~s, expected real numbers."
+                      predicate values)))
+           (if (= arity 1) (first values) (copy-list values)))
           (default-p default)
           (t (error "No costmap metadata (~(~a~)~{ ~a~}): declare it for the robot ~s, e.g. ~
                      (def-fact-group my-metadata (costmap:~(~a~)) (<- (costmap:~(~:*~a~) ...)))."
-                    predicate vars rob-int:*robot-name* predicate)))))
+                    predicate (metadata-variables arity) rob-int:*robot-name* predicate)))))
 
 ;;; ---- cost functions ----------------------------------------------------------------------------
 
@@ -67,15 +96,20 @@ else an error naming the predicate."
    (bounds :initarg :bounds :initform nil :reader cost-function-bounds
            :documentation "NIL, or (x-min y-min x-max y-max) outside which the value is 0.")
    (grid-evaluator :initarg :grid-evaluator :initform nil :reader cost-function-grid-evaluator
-                   :documentation "NIL, or a function (costmap matrix row-0 row-1 col-0 col-1)
-that multiplies the cells of MATRIX in the given index ranges by the function's values."))
+                   :documentation "NIL, or a function (costmap window row-0 row-1 col-0 col-1)
+that multiplies the cells of the costmap in rows ROW-0..ROW-1 and columns COL-0..COL-1 (end
+exclusive) by the function's values at their centres; WINDOW holds those cells only, the cell
+\(row column) at (- row row-0) (- column col-0)."))
   (:metaclass sb-mop:funcallable-standard-class)
   (:documentation "A cost function (x y) -> non-negative real that may know where it is zero
 (its bounds) and how to fill a whole grid quickly.  Plain functions (x y) work as well."))
 
 (defun make-cost-function (function &key name bounds grid-evaluator)
   "A COST-FUNCTION calling FUNCTION (x y); BOUNDS (x-min y-min x-max y-max) tells where it can
-be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies a grid block."
+be non-zero, GRID-EVALUATOR (costmap window row-0 row-1 col-0 col-1) multiplies the block of
+cells rows ROW-0..ROW-1, columns COL-0..COL-1 (end exclusive), which WINDOW holds with the
+cell (row column) at (- row row-0) (- column col-0), by the function's values (a cell that is
+0 may be left alone)."
   (unless (functionp function)
     (error "MAKE-COST-FUNCTION: expected a function of (x y), got ~s." function))
   (when bounds
@@ -107,15 +141,30 @@ be non-zero, GRID-EVALUATOR (costmap matrix row-0 row-1 col-0 col-1) multiplies 
    (orientation-generators :initform '() :initarg :orientation-generators
                            :accessor orientation-generators)
    (height-generators :initform '() :initarg :height-generators :accessor height-generators)
-   (matrix :initform nil :accessor %matrix)
+   (window :initform nil :accessor %window
+           :documentation "NIL, or the values of the cells of REGION (COST-WINDOW).")
+   (matrix :initform nil :accessor %matrix
+           :documentation "NIL, or the values of all cells (COST-GRID), made when asked for.")
+   (total :initform nil :accessor %total
+          :documentation "NIL, or the sum of the cells in row-major order (COSTMAP-TOTAL).")
    (normalized :initform nil :accessor %normalized
-               :documentation "NIL, or (total . normalised copy of the grid) for GET-COST-MAP.")
+               :documentation "NIL, or the normalised copy of the grid for GET-COST-MAP.")
    (region :initform nil :accessor %region
            :documentation "(row-0 row-1 col-0 col-1) outside which the grid is 0.")
    (distribution :initform nil :accessor %distribution)
-   (random-state :initarg :random-state :reader costmap-random-state))
+   (random-state :initarg :random-state :accessor %random-state
+                 :documentation "The costmap's random state, or until it is first asked for
+\(COSTMAP-RANDOM-STATE) the integer it is seeded with: seeding one takes longer than building
+most costmaps, and many are merged or only counted and never sampled."))
   (:documentation "A grid over the map whose cell values are the product of the registered
 cost functions; samples are poses drawn with probability proportional to the cell values."))
+
+(defun costmap-random-state (costmap)
+  "The random state COSTMAP samples with, seeded from its seed the first time it is asked for."
+  (let ((state (%random-state costmap)))
+    (if (integerp state)
+        (setf (%random-state costmap) (sb-ext:seed-random-state state))
+        state)))
 
 (defmethod print-object ((c location-costmap) stream)
   (print-unreadable-object (c stream :type t :identity t)
@@ -178,8 +227,11 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
   (check-generator-list (orientation-generators c) "orientation generators")
   (check-generator-list (height-generators c) "height generators")
   (unless (slot-boundp c 'random-state)
-    (setf (slot-value c 'random-state)
-          (sb-ext:seed-random-state (random (expt 2 62) *costmap-random-state*))))
+    (setf (slot-value c 'random-state) (random (expt 2 62) *costmap-random-state*)))
+  (unless (or (random-state-p (slot-value c 'random-state))
+              (typep (slot-value c 'random-state) '(integer 0)))
+    (error "LOCATION-COSTMAP: the random state ~s, expected a random state or a non-negative ~
+            integer to seed one with." (slot-value c 'random-state)))
   (setf (slot-value c 'columns) (max 1 (round (to-double (width c)) (resolution c)))
         (slot-value c 'rows) (max 1 (round (to-double (height c)) (resolution c)))))
 
@@ -192,8 +244,8 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
   (+ (origin-y costmap) (* (+ row 0.5d0) (resolution costmap))))
 
 (defun invalidate-costmap (costmap)
-  (setf (%matrix costmap) nil (%distribution costmap) nil (%region costmap) nil
-        (%normalized costmap) nil)
+  (setf (%window costmap) nil (%matrix costmap) nil (%total costmap) nil
+        (%distribution costmap) nil (%region costmap) nil (%normalized costmap) nil)
   costmap)
 
 (defgeneric costmap-generator-name->score (name)
@@ -252,8 +304,10 @@ height generators of all of them."
                                       :resolution (resolution first)
                                       :origin-x (origin-x first) :origin-y (origin-y first)
                                       :cost-functions '()
-                                      :random-state (make-random-state
-                                                     (costmap-random-state first)))))
+                                      :random-state (let ((state (%random-state first)))
+                                                      (if (integerp state)
+                                                          state
+                                                          (make-random-state state))))))
           (dolist (c costmaps merged)
             (loop for (name fn score) in (cost-functions c)
                   do (register-cost-function merged fn name score))
@@ -292,18 +346,19 @@ height generators of all of them."
            :reason (format nil "the cost function ~(~a~) gave ~s at (~,3f ~,3f), expected a ~
                                 finite non-negative real." name value x y))))
 
-(defun multiply-by-function (costmap matrix name function r0 r1 c0 c1)
-  "Multiply the non-zero cells of MATRIX in rows R0..R1 and columns C0..C1 (end exclusive) by
-FUNCTION (x y) at their centres."
-  (declare (type (simple-array double-float (* *)) matrix) (type fixnum r0 r1 c0 c1)
+(defun multiply-by-function (costmap window name function r0 r1 c0 c1)
+  "Multiply the non-zero cells of the costmap in rows R0..R1 and columns C0..C1 (end
+exclusive), which WINDOW holds from cell (R0 C0) on, by FUNCTION (x y) at their centres."
+  (declare (type (simple-array double-float (* *)) window) (type fixnum r0 r1 c0 c1)
            (type function function))
   (let ((xs (make-array (max 0 (- c1 c0)) :element-type 'double-float)))
     (loop for c from c0 below c1 do (setf (aref xs (- c c0)) (cell-center-x costmap c)))
     (loop for r of-type fixnum from r0 below r1
+          for wr of-type fixnum from 0
           for y of-type double-float = (cell-center-y costmap r)
-          do (loop for c of-type fixnum from c0 below c1
-                   when (> (aref matrix r c) 0d0)
-                     do (let* ((x (aref xs (- c c0)))
+          do (loop for wc of-type fixnum from 0 below (- c1 c0)
+                   when (> (aref window wr wc) 0d0)
+                     do (let* ((x (aref xs wc))
                                (v (funcall function x y)))
                           (unless (typep v 'double-float)
                             (check-cell-value costmap name v x y)
@@ -312,26 +367,42 @@ FUNCTION (x y) at their centres."
                             (unless (and (not (sb-ext:float-nan-p v)) (>= v 0d0)
                                          (< v most-positive-double-float))
                               (check-cell-value costmap name v x y))
-                            (setf (aref matrix r c) (* (aref matrix r c) v))))))))
+                            (setf (aref window wr wc) (* (aref window wr wc) v))))))))
+
+(defun cost-window (costmap)
+  "(values window region): the values of COSTMAP in the cells of REGION (row-0 row-1 col-0
+col-1, end exclusive), outside which every value is 0: the cells where all cost functions
+with bounds can be non-zero.  WINDOW is a (row-1 - row-0) x (col-1 - col-0) double-float array
+whose cell (0 0) is the costmap's cell (row-0 col-0), each the product of the cost functions
+at the cell's centre; computed once and kept until another function is registered."
+  (unless (%window costmap)
+    (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
+      (let ((window (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
+                                :element-type 'double-float :initial-element 1d0)))
+        (when (and (< r0 r1) (< c0 c1))
+          (loop for (name fn) in (cost-functions costmap)
+                for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
+                do (if evaluator
+                       (funcall evaluator costmap window r0 r1 c0 c1)
+                       (multiply-by-function costmap window name fn r0 r1 c0 c1))))
+        (setf (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1))
+              (%window costmap) window))))
+  (values (%window costmap) (%region costmap)))
 
 (defun cost-grid (costmap)
   "The value grid of COSTMAP, not normalised: a (rows x columns) double-float array, row = y
-index, column = x index, each cell the product of the cost functions at its centre; computed
-once and cached until another function is registered."
+index, column = x index, each cell the product of the cost functions at its centre (0 outside
+the cells COST-WINDOW computes); made once and kept until another function is registered."
   (or (%matrix costmap)
-      (let* ((rows (costmap-rows costmap)) (cols (costmap-columns costmap))
-             (m (make-array (list rows cols) :element-type 'double-float :initial-element 0d0)))
-        (declare (type (simple-array double-float (* *)) m))
-        (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
-          (setf (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))
-          (when (and (< r0 r1) (< c0 c1))
-            (loop for r from r0 below r1 do (loop for c from c0 below c1 do (setf (aref m r c) 1d0)))
-            (loop for (name fn) in (cost-functions costmap)
-                  for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
-                  do (if evaluator
-                         (funcall evaluator costmap m r0 r1 c0 c1)
-                         (multiply-by-function costmap m name fn r0 r1 c0 c1)))))
-        (setf (%matrix costmap) m))))
+      (multiple-value-bind (window region) (cost-window costmap)
+        (declare (type (simple-array double-float (* *)) window))
+        (let ((m (make-array (list (costmap-rows costmap) (costmap-columns costmap))
+                             :element-type 'double-float :initial-element 0d0)))
+          (destructuring-bind (r0 r1 c0 c1) region
+            (loop for r from r0 below r1
+                  do (loop for c from c0 below c1
+                           do (setf (aref m r c) (aref window (- r r0) (- c c0))))))
+          (setf (%matrix costmap) m)))))
 
 ;;; ---- sampling -------------------------------------------------------------------------------------
 
@@ -340,45 +411,43 @@ once and cached until another function is registered."
   (cumulative #() :type (simple-array double-float (*)))
   (total 0d0 :type double-float))
 
-(defun positive-cells (grid region)
-  "How many cells of GRID within REGION (row-0 row-1 col-0 col-1) are above 0."
-  (declare (type (simple-array double-float (* *)) grid) (optimize speed))
-  (destructuring-bind (r0 r1 c0 c1) region
-    (declare (type fixnum r0 r1 c0 c1))
-    (let ((n 0))
-      (declare (type fixnum n))
-      (loop for r of-type fixnum from r0 below r1
-            do (loop for c of-type fixnum from c0 below c1
-                     when (> (aref grid r c) 0d0) do (incf n)))
-      n)))
+(defun positive-cells (window)
+  "How many cells of WINDOW are above 0."
+  (declare (type (simple-array double-float (* *)) window) (optimize speed))
+  (let ((n 0))
+    (declare (type fixnum n))
+    (dotimes (i (array-total-size window) n)
+      (when (> (row-major-aref window i) 0d0) (incf n)))))
 
 (defun costmap-distribution (costmap)
   (or (%distribution costmap)
-      (let* ((m (cost-grid costmap))
-             (cols (costmap-columns costmap))
-             (region (%region costmap))
-             (count (positive-cells m region))
-             (cells (make-array count :element-type 'fixnum))
-             (cumulative (make-array count :element-type 'double-float))
-             (sum 0d0) (k 0))
-        (declare (type (simple-array double-float (* *)) m) (type double-float sum) (type fixnum k cols)
-                 (type (simple-array fixnum (*)) cells) (type (simple-array double-float (*)) cumulative))
-        (destructuring-bind (r0 r1 c0 c1) region
-          (declare (type fixnum r0 r1 c0 c1) (optimize speed))
-          (loop for r of-type fixnum from r0 below r1
-                do (loop for c of-type fixnum from c0 below c1
-                         do (let ((v (aref m r c)))
-                              (when (> v 0d0)
-                                (incf sum v)
-                                (setf (aref cells k) (+ c (* r cols)) (aref cumulative k) sum)
-                                (incf k))))))
-        (when (zerop count)
-          (error 'invalid-probability-distribution
-                 :costmap costmap
-                 :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
-                                 (mapcar #'first (cost-functions costmap)))))
-        (setf (%distribution costmap)
-              (make-distribution :cells cells :cumulative cumulative :total sum)))))
+      (multiple-value-bind (window region) (cost-window costmap)
+        (let* ((cols (costmap-columns costmap))
+               (count (positive-cells window))
+               (cells (make-array count :element-type 'fixnum))
+               (cumulative (make-array count :element-type 'double-float))
+               (sum 0d0) (k 0))
+          (declare (type (simple-array double-float (* *)) window) (type double-float sum)
+                   (type fixnum k cols) (type (simple-array fixnum (*)) cells)
+                   (type (simple-array double-float (*)) cumulative))
+          (destructuring-bind (r0 r1 c0 c1) region
+            (declare (type fixnum r0 r1 c0 c1) (optimize speed))
+            (loop for r of-type fixnum from r0 below r1
+                  for wr of-type fixnum from 0
+                  do (loop for c of-type fixnum from c0 below c1
+                           for wc of-type fixnum from 0
+                           do (let ((v (aref window wr wc)))
+                                (when (> v 0d0)
+                                  (incf sum v)
+                                  (setf (aref cells k) (+ c (* r cols)) (aref cumulative k) sum)
+                                  (incf k))))))
+          (when (zerop count)
+            (error 'invalid-probability-distribution
+                   :costmap costmap
+                   :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
+                                   (mapcar #'first (cost-functions costmap)))))
+          (setf (%distribution costmap)
+                (make-distribution :cells cells :cumulative cumulative :total sum))))))
 
 (defun draw-cell (distribution random-state)
   "A row-major cell index drawn with probability proportional to its value."

@@ -103,19 +103,27 @@ back x > 0, right y < 0, left y > 0."
       (reference-body designator "ORIENTATION")
       (relation-support-body designator)))
 
+(defun nearest-edge-yaw-function (body)
+  "A function (x y) -> NEAREST-EDGE-YAW of BODY at the map point (X Y); BODY's frame and box
+are worked out once."
+  (multiple-value-bind (hx hy) (body-local-extent body)
+    (let ((local (body-local-function body))
+          (yaw (body-yaw body)))
+      (multiple-value-bind (cx cy)
+          (funcall local
+                   (/ (+ (cl-transforms:x (body-lo body)) (cl-transforms:x (body-hi body))) 2)
+                   (/ (+ (cl-transforms:y (body-lo body)) (cl-transforms:y (body-hi body))) 2))
+        (lambda (x y)
+          (multiple-value-bind (px py) (funcall local x y)
+            (let ((dx (- px cx)) (dy (- py cy)))
+              (+ yaw
+                 (if (< (- hx (abs dx)) (- hy (abs dy)))
+                     (if (minusp dx) pi 0d0)
+                     (if (minusp dy) (/ pi -2) (/ pi 2)))))))))))
+
 (defun nearest-edge-yaw (body x y)
   "The yaw (map) of the outward normal of the edge of BODY's box nearest to the map point (X Y)."
-  (multiple-value-bind (hx hy) (body-local-extent body)
-    (multiple-value-bind (cx cy)
-        (body-local-point body
-                          (/ (+ (cl-transforms:x (body-lo body)) (cl-transforms:x (body-hi body))) 2)
-                          (/ (+ (cl-transforms:y (body-lo body)) (cl-transforms:y (body-hi body))) 2))
-      (multiple-value-bind (px py) (body-local-point body x y)
-        (let ((dx (- px cx)) (dy (- py cy)))
-          (+ (body-yaw body)
-             (if (< (- hx (abs dx)) (- hy (abs dy)))
-                 (if (minusp dx) pi 0d0)
-                 (if (minusp dy) (/ pi -2) (/ pi 2)))))))))
+  (funcall (nearest-edge-yaw-function body) x y))
 
 (defun support-aligned-costmap (designator orientation)
   "(orientation support-aligned): the object's x axis along the outward normal of the edge of
@@ -123,10 +131,10 @@ the supporting body nearest to the pose, first pointing out of it, then into it.
   (unless (eq (keyword-of orientation) :support-aligned)
     (error "Location designator ~a: (orientation ~s), expected SUPPORT-ALIGNED." designator orientation))
   (let* ((costmap (make-location-costmap))
-         (body (orientation-body designator)))
+         (edge-yaw (nearest-edge-yaw-function (orientation-body designator))))
     (register-orientation-generator costmap (lambda (x y previous)
                                               (declare (ignore previous))
-                                              (let ((yaw (nearest-edge-yaw body x y)))
+                                              (let ((yaw (funcall edge-yaw x y)))
                                                 (list (yaw-quaternion yaw)
                                                       (yaw-quaternion (+ yaw pi))))))
     costmap))

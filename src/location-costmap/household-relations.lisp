@@ -174,8 +174,7 @@ quarter turns about the vertical as orientations (MAKE-QUARTER-TURNS-ORIENTATION
                    ;; extents, turned as it will lie
                    (let ((body (orientation-body designator)))
                      (multiple-value-bind (hx hy) (object-half-extents for-object)
-                       (turned-items-free-space-function
-                        items hx hy (lambda (x y) (nearest-edge-yaw body x y)))))
+                       (turned-items-free-space-function items hx hy (nearest-edge-yaw-function body))))
                    (items-free-space-function items for-half))
                'relation-free-space 5))))
         (unless (some (lambda (key) (desig:desig-prop-value designator key)) '(:on :in :above))

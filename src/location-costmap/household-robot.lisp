@@ -110,12 +110,17 @@ handle at both limits."
 (defun kitchen-restricted-area (x y)
   "1 where the robot may stand in the IAI kitchen, else 0: not beyond x 1.2 (the sink and
 fridge row), and inside the kitchen's walls."
-  (cond ((> x 1.2d0) 0d0)
-        ((and (> x 0.5d0) (< -1.5d0 y 2d0)) 1d0)
-        ((and (> x 0d0) (< -1.5d0 y 1d0)) 1d0)
-        ((and (> x -1.5d0) (< -1.5d0 y 2.5d0)) 1d0)
-        ((and (> x -4d0) (< -1d0 y 1d0)) 1d0)
-        (t 0d0)))
+  (macrolet ((area ()
+               '(cond ((> x 1.2d0) 0d0)
+                      ((and (> x 0.5d0) (< -1.5d0 y 2d0)) 1d0)
+                      ((and (> x 0d0) (< -1.5d0 y 1d0)) 1d0)
+                      ((and (> x -1.5d0) (< -1.5d0 y 2.5d0)) 1d0)
+                      ((and (> x -4d0) (< -1d0 y 1d0)) 1d0)
+                      (t 0d0))))
+    ;; a costmap asks at every cell centre, with double-floats
+    (if (and (typep x 'double-float) (typep y 'double-float))
+        (locally (declare (type double-float x y) (optimize speed)) (area))
+        (area))))
 
 (defvar *restricted-area-function* nil
   "NIL, or a function (x y) -> 0 or 1 restricting where VISIBLE-FOR and REACHABLE-FOR base poses

@@ -65,6 +65,53 @@ wrote with the short names in their own package.  Packages are taken in name ord
                 append (loop for answer in (cut:force-ll (prolog `(,symbol ,@vars)))
                              collect (cons functor (mapcar (lambda (v) (cut:var-value v answer)) vars)))))))))
 
+(defparameter *metadata-interface-goals* '(user-costmap-metadata current-robot-costmap-metadata)
+  "The functors of the goals by which this package's own rules answer a metadata predicate.")
+
+(defun fact-clauses-p (functor &key (interface-rules nil))
+  "True when every clause of FUNCTOR is a fact, a rule whose body is (fail), or, with
+INTERFACE-RULES, one of this package's rules answering through *METADATA-INTERFACE-GOALS*;
+and FUNCTOR has no Lisp handler: its answers depend on nothing but the database."
+  (let ((pred (gethash functor prolog::*predicates*)))
+    (and (or (null pred) (null (prolog::pred-handler pred)))
+         (every (lambda (clause)
+                  (let ((body (cdr clause)))
+                    (or (null body)
+                        (and (null (cdr body)) (consp (first body))
+                             (or (string= (symbol-name (car (first body))) "FAIL")
+                                 (and interface-rules
+                                      (member (car (first body)) *metadata-interface-goals*)))))))
+                (prolog:predicate-clauses functor)))))
+
+(defun interface-only-p (functor)
+  "True when FUNCTOR's clauses are all this package's own (the fact group
+LOCATION-COSTMAP-METADATA-INTERFACE) and it has no Lisp handler."
+  (let ((pred (gethash functor prolog::*predicates*)))
+    (and pred (null (prolog::pred-handler pred)) (null (prolog::pred-dynamic pred))
+         (every (lambda (source) (eq (car source) 'location-costmap-metadata-interface))
+                (prolog::pred-sources pred)))))
+
+(defvar *metadata-facts-verdicts* (make-hash-table :test 'eq :synchronized t)
+  "Metadata functor -> (generation . verdict) of METADATA-FROM-FACTS-P.")
+
+(defun metadata-from-facts-p (functor)
+  "True when the answers of the metadata predicate FUNCTOR come from facts only: its own
+clauses, those of ROBOT-COSTMAP-METADATA and those of the user's predicates named like it
+\(USER-METADATA-CANDIDATES) are facts (FACT-CLAUSES-P). Its first answer then stays the same
+for the same current robot until the Prolog database changes (clauses a user adds in a new
+package change it too)."
+  (let* ((generation (prolog:database-generation))
+         (cached (gethash functor *metadata-facts-verdicts*)))
+    (if (and cached (eql (car cached) generation))
+        (cdr cached)
+        (let ((verdict (and (every #'interface-only-p *metadata-interface-goals*)
+                            (fact-clauses-p functor :interface-rules t)
+                            (fact-clauses-p 'robot-costmap-metadata)
+                            (every #'fact-clauses-p (user-metadata-candidates functor))
+                            t)))
+          (setf (gethash functor *metadata-facts-verdicts*) (cons generation verdict))
+          verdict))))
+
 (def-fact-group location-costmap-metadata-interface
     (costmap-size costmap-origin costmap-resolution
      costmap-padding costmap-manipulation-padding

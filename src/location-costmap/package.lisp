@@ -13,7 +13,7 @@
    #:visibility-costmap-size #:orientation-samples #:orientation-sample-step
    #:robot-costmap-metadata #:current-robot-costmap-metadata #:user-costmap-metadata
    ;; costmaps
-   #:location-costmap #:make-location-costmap #:get-cost-map #:get-map-value
+   #:location-costmap #:make-location-costmap #:get-cost-map #:get-map-value #:positive-cells-within
    #:no-cost-functions-registered #:gen-costmap-sample-point #:cost-functions
    #:height-generators #:orientation-generators
    #:costmap-samples #:register-cost-function #:register-height-generator

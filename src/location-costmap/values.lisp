@@ -17,49 +17,75 @@
   (unless (cost-functions costmap)
     (error 'no-cost-functions-registered :costmap costmap)))
 
-(defun grid-sum (grid region)
-  "The sum of the cells of GRID, a double-float array that is 0 outside REGION (row-0 row-1
-col-0 col-1), added in row-major order."
-  (declare (type (simple-array double-float (* *)) grid) (optimize speed))
-  (destructuring-bind (r0 r1 c0 c1) region
-    (declare (type fixnum r0 r1 c0 c1))
-    (let ((total 0d0))
-      (declare (type double-float total))
-      (loop for r of-type fixnum from r0 below r1
-            do (loop for c of-type fixnum from c0 below c1
-                     do (incf total (aref grid r c))))
-      total)))
+(defun window-sum (window)
+  "The sum of the cells of WINDOW, added in row-major order."
+  (declare (type (simple-array double-float (* *)) window) (optimize speed))
+  (let ((total 0d0))
+    (declare (type double-float total))
+    (dotimes (i (array-total-size window) total)
+      (incf total (row-major-aref window i)))))
 
-(defun divided-grid (grid divisor region)
-  "A fresh array of GRID's cells divided by DIVISOR; GRID is 0 outside REGION (row-0 row-1
-col-0 col-1), and so is the copy."
-  (declare (type (simple-array double-float (* *)) grid) (type double-float divisor)
-           (optimize speed))
-  (let ((divided (make-array (array-dimensions grid) :element-type 'double-float
-                                                     :initial-element 0d0)))
-    (destructuring-bind (r0 r1 c0 c1) region
-      (declare (type fixnum r0 r1 c0 c1))
-      (loop for r of-type fixnum from r0 below r1
-            do (loop for c of-type fixnum from c0 below c1
-                     do (setf (aref divided r c) (/ (aref grid r c) divisor)))))
-    divided))
+(defun costmap-total (costmap)
+  "The sum of COSTMAP's cells (row-major order); INVALID-PROBABILITY-DISTRIBUTION when it is 0."
+  (or (%total costmap)
+      (let ((total (window-sum (cost-window costmap))))
+        (when (zerop total)
+          (error 'invalid-probability-distribution
+                 :costmap costmap
+                 :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
+                                 (mapcar #'first (cost-functions costmap)))))
+        (setf (%total costmap) total))))
 
 (defun normalized-grid (costmap)
   "(values grid total): COSTMAP's grid divided by the sum of its cells, and that sum."
-  (let ((cached (%normalized costmap)))
-    (if cached
-        (values (cdr cached) (car cached))
-        (let* ((raw (cost-grid costmap))
-               (region (%region costmap))
-               (total (grid-sum raw region)))
-          (when (zerop total)
-            (error 'invalid-probability-distribution
-                   :costmap costmap
-                   :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
-                                   (mapcar #'first (cost-functions costmap)))))
-          (let ((grid (divided-grid raw total region)))
-            (setf (%normalized costmap) (cons total grid))
-            (values grid total))))))
+  (let ((total (costmap-total costmap)))
+    (values (or (%normalized costmap)
+                (multiple-value-bind (window region) (cost-window costmap)
+                  (declare (type (simple-array double-float (* *)) window))
+                  (let ((grid (make-array (list (costmap-rows costmap) (costmap-columns costmap))
+                                          :element-type 'double-float :initial-element 0d0)))
+                    (declare (type (simple-array double-float (* *)) grid) (type double-float total))
+                    (destructuring-bind (r0 r1 c0 c1) region
+                      (declare (type fixnum r0 r1 c0 c1))
+                      (loop for r of-type fixnum from r0 below r1
+                            do (loop for c of-type fixnum from c0 below c1
+                                     do (setf (aref grid r c) (/ (aref window (- r r0) (- c c0)) total)))))
+                    (setf (%normalized costmap) grid))))
+            total)))
+
+(defun normalized-value (costmap row column)
+  "The value of COSTMAP's cell (ROW COLUMN) in its normalised grid (GET-COST-MAP), without making
+that grid."
+  (let ((total (costmap-total costmap)))
+    (multiple-value-bind (window region) (cost-window costmap)
+      (destructuring-bind (r0 r1 c0 c1) region
+        (if (and (<= r0 row) (< row r1) (<= c0 column) (< column c1))
+            (/ (aref window (- row r0) (- column c0)) total)
+            0d0)))))
+
+(defun positive-cells-within (costmap x y radius)
+  "How many cells of COSTMAP are above 0 in its normalised grid (GET-COST-MAP) and have their
+centres within RADIUS metres (horizontally) of the map point (X Y).  Signals as GET-COST-MAP
+does for a costmap without cost functions or one that is 0 everywhere."
+  (check-costmap costmap 'positive-cells-within)
+  (loop for (what value) in `(("x" ,x) ("y" ,y) ("radius" ,radius))
+        unless (finite-real-p value)
+          do (error "POSITIVE-CELLS-WITHIN: the ~a is ~s, expected a finite real (metres)."
+                    what value))
+  (let ((total (costmap-total costmap))
+        (reach2 (expt radius 2))
+        (count 0))
+    (multiple-value-bind (window region) (cost-window costmap)
+      (declare (type (simple-array double-float (* *)) window))
+      (destructuring-bind (r0 r1 c0 c1) region
+        (loop for r from r0 below r1
+              for dy2 = (expt (- (cell-center-y costmap r) y) 2)
+              unless (> dy2 reach2)
+                do (loop for c from c0 below c1
+                         when (and (plusp (/ (aref window (- r r0) (- c c0)) total))
+                                   (<= (+ dy2 (expt (- (cell-center-x costmap c) x) 2)) reach2))
+                           do (incf count)))))
+    count))
 
 (defun get-cost-map (costmap)
   "The value grid of COSTMAP as a probability distribution: a (rows x columns) double-float
@@ -79,11 +105,11 @@ outside the grid."
           do (error "GET-MAP-VALUE: the ~a coordinate is ~s, expected a finite real (metres)."
                     what value))
   (check-costmap costmap 'get-map-value)
-  (let ((grid (normalized-grid costmap))
-        (c (floor (- x (origin-x costmap)) (resolution costmap)))
+  (let ((c (floor (- x (origin-x costmap)) (resolution costmap)))
         (r (floor (- y (origin-y costmap)) (resolution costmap))))
+    (costmap-total costmap)
     (if (and (< -1 r (costmap-rows costmap)) (< -1 c (costmap-columns costmap)))
-        (aref grid r c)
+        (normalized-value costmap r c)
         0d0)))
 
 (defun gen-costmap-sample-point (costmap &key sampling-function)
