@@ -462,6 +462,62 @@ the handle and the drawer stays where it was; no other handle grasp is tried for
     (is (equal '((0.9d0 0d0) (0.9d0 0.48d0) (0.9d0 0d0) (0d0 0d0)) (reverse states))
         "door and tray states after each event: ~a" (reverse states))))
 
+;; ---- where the robot stands
+
+;; reachability as each IK call gives it: the wrist goal and the chain looked up per call
+(defun reference-poses-reachable-p (arm poses robot)
+  (let* ((base (btr:pose robot))
+         (torso (urdf-proj:torso-joint))
+         (torso-value (btr:joint-state robot torso))
+         (heights (urdf-proj::torso-candidates robot nil)))
+    (unwind-protect
+         (some (lambda (height)
+                 (btr:set-robot-state-from-joints (list (list torso height)) robot)
+                 (every (lambda (pose)
+                          (some (lambda (dx)
+                                  (setf (btr:pose robot)
+                                        (env-man::translate-pose
+                                         base (cl-transforms:rotate (cl-transforms:orientation base)
+                                                                    (cl-transforms:make-3d-vector dx 0 0))))
+                                  (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot) :robot robot
+                                                    :max-restarts env-man::*reachability-ik-restarts*))
+                                env-man::*reach-base-offsets*))
+                        poses))
+               heights)
+      (setf (btr:pose robot) base)
+      (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))))
+
+(test reachability-is-the-ik-of-each-pose
+  ;; base poses in front of the drawer, each grasp's checkpoints, opened and closed: the same
+  ;; answers as solving each wrist goal on its own, with the same random numbers drawn
+  (btw-tut:init-projection)
+  (let* ((drawer (container :sink-area-left-upper-drawer-main))
+         (robot (btr:get-robot-object))
+         (start (btr:pose robot))
+         (reachable 0) (unreachable 0))
+    (dolist (action '(:open :close))
+      (when (eq action :close)
+        (btw-tut:move-kitchen-joint :joint-name "sink_area_left_upper_drawer_main_joint" :joint-angle 0.4))
+      (dolist (pose (subseq (env-man::prismatic-base-candidates drawer action :right 0.4) 0 8))
+        (setf (btr:pose robot) pose)
+        (dolist (grasp '(:front :front-along-y :back))
+          (let* ((checkpoints (env-man::trajectory-checkpoints (env-man:container-trajectory drawer action grasp 0.4)))
+                 (state (sb-ext:seed-random-state 17))
+                 (expected (let ((urdf-proj:*ik-random-state* (make-random-state state)))
+                             (list (reference-poses-reachable-p :right checkpoints robot)
+                                   (random 1000000 urdf-proj:*ik-random-state*))))
+                 (got (let ((urdf-proj:*ik-random-state* (make-random-state state)))
+                        (list (env-man::poses-reachable-p :right checkpoints robot)
+                              (random 1000000 urdf-proj:*ik-random-state*)))))
+            (if (first got) (incf reachable) (incf unreachable))
+            (is (equal (list (not (first expected)) (second expected)) (list (not (first got)) (second got)))
+                "~a ~a at ~a: ~s, expected ~s" action grasp pose got expected)
+            (is (< (cl-transforms:v-dist (cl-transforms:origin pose) (cl-transforms:origin (btr:pose robot))) 1d-9)
+                "the robot did not stay where it stood")))))
+    (setf (btr:pose robot) start)
+    (is (plusp reachable))
+    (is (plusp unreachable))))
+
 ;; ---- what moves with the hand
 
 (defun sweeps-opening-and-closing (urdf-name distance allow)
