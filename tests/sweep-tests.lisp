@@ -371,6 +371,119 @@ pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
         (is (search "\"type\":\"sweep\"" json))
         (is (search "\"fraction\"" json))))))
 
+;; ---- contacts arrived at on purpose
+
+(defun sweep-pairs (sweeps)
+  (mapcar (lambda (s) (list (urdf-proj:sweep-moving s) (urdf-proj:sweep-moving-link s)
+                            (urdf-proj:sweep-hit s) (urdf-proj:sweep-hit-link s) (urdf-proj:sweep-fraction s)))
+          sweeps))
+
+(defun sweeps-with-arrivals-forced (before value)
+  "ROBOT-SWEEPS from BEFORE to now with ARRIVAL-CANDIDATE-P answering VALUE (:ALWAYS: true,
+:NEVER: false) instead of looking at the records."
+  (sb-int:encapsulate 'urdf-proj::arrival-candidate-p 'forced
+                      (lambda (f &rest args) (declare (ignore f args)) (eq value :always)))
+  (unwind-protect (sweep-pairs (urdf-proj:robot-sweeps before "test" :arm))
+    (sb-int:unencapsulate 'urdf-proj::arrival-candidate-p 'forced)))
+
+(test arrivals-are-looked-up-only-where-a-record-may-be-one
+  ;; the right hand passes a board and ends at a cup (an item it arrives at on purpose), with and
+  ;; without a carried stick, and seeded random moves: the sweeps reported are those found when
+  ;; the contacts at the end are always looked up
+  (with-open-world ()
+    (setf urdf-proj:*sweep-check* :warn)
+    (add-board)
+    (set-right-arm *right-out*)
+    (add-box 'cup (point-on-link "r_gripper_palm_link" 0.12) '(0.06 0.06 0.1))
+    (is (robot-touches 'cup))
+    (set-right-arm *right-park*)
+    (let ((before (urdf-proj::robot-state-vectors (robot))))
+      (set-right-arm *right-out*)
+      (let ((fast (sweep-pairs (urdf-proj:robot-sweeps before "test" :arm))))
+        (is (equal (sweeps-with-arrivals-forced before :always) fast))
+        ;; the hand reaches the cup on the way, and arriving at it is not reported
+        (is (find 'cup (sweeps-with-arrivals-forced before :never) :key #'third))
+        (is (not (find 'cup fast :key #'third)))
+        (is (find 'board fast :key #'third))))
+    (let ((state (sb-ext:seed-random-state 9)) (moves 0))
+      (dolist (carry '(nil t))
+        (when carry
+          (set-right-arm *right-park*)
+          (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
+            (btr:add-object btr:*current-bullet-world* :box 'stick
+                            `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
+                            :size '(0.02 0.02 0.3) :mass 0.1)
+            (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame")))
+        (dotimes (k 12)
+          (let ((before (urdf-proj::robot-state-vectors (robot))))
+            (set-right-arm (if (evenp k) *right-out* (random-arm state)))
+            (let ((fast (sweep-pairs (urdf-proj:robot-sweeps before "test" :arm))))
+              (when fast (incf moves))
+              (is (equal (sweeps-with-arrivals-forced before :always) fast))))))
+      (is (< 4 moves) "only ~d moves reported sweeps" moves))))
+
+;; the paths as the belief state gives them: the robot set to each step through BTR, each
+;; moving frame read as a pose
+(defun reference-paths (before after sweeps)
+  (let* ((robot (robot)) (now (urdf-proj::robot-state-vectors robot))
+         (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
+         (joints (btr:joint-names robot)))
+    (unwind-protect
+         (loop for k from 0 to 16
+               for f = (/ k 16d0)
+               collect (progn
+                         (setf (btr:pose robot)
+                               (cl-transforms:make-pose
+                                (cl-transforms:v+ (cl-transforms:origin b0)
+                                                  (cl-transforms:v* (cl-transforms:v- (cl-transforms:origin b1)
+                                                                                      (cl-transforms:origin b0))
+                                                                    f))
+                                (cl-transforms:slerp (cl-transforms:orientation b0) (cl-transforms:orientation b1) f)))
+                         (btr:set-robot-state-from-joints
+                          (loop for j in joints
+                                for i = (btr:joint-index robot j)
+                                collect (list j (+ (aref (cdr before) i)
+                                                   (* f (- (aref (cdr after) i) (aref (cdr before) i))))))
+                          robot)
+                         (mapcar (lambda (s)
+                                   (let ((p (cl-transforms:origin
+                                             (if (urdf-proj:sweep-moving-link s)
+                                                 (btr:link-pose robot (urdf-proj:sweep-moving-link s))
+                                                 (btr:pose (btr:object btr:*current-bullet-world* (urdf-proj:sweep-moving s)))))))
+                                     (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p))))
+                                 sweeps)))
+      (urdf-proj::restore-robot-state robot now))))
+
+(test sweep-paths-are-the-moving-frames-along-the-motion
+  ;; a base move with a turn and an arm move, a link and a carried object: the same numbers as
+  ;; setting the robot to each step and reading the frames, and the robot left where it was
+  (with-open-world ()
+    (set-right-arm *right-park*)
+    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
+      (btr:add-object btr:*current-bullet-world* :box 'stick
+                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
+                      :size '(0.02 0.02 0.3) :mass 0.1)
+      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (let* ((before (urdf-proj::robot-state-vectors (robot)))
+           (after (progn (set-right-arm *right-out*)
+                         (setf (btr:pose (robot)) (cl-transforms:make-pose
+                                                   (cl-transforms:make-3d-vector 0.3 -0.2 0)
+                                                   (cl-transforms:axis-angle->quaternion
+                                                    (cl-transforms:make-3d-vector 0 0 1) 0.7)))
+                         (urdf-proj::robot-state-vectors (robot))))
+           (sweeps (list (urdf-proj::make-sweep :moving :pr2 :moving-link "r_forearm_link")
+                         (urdf-proj::make-sweep :moving 'stick)
+                         (urdf-proj::make-sweep :moving :pr2 :moving-link "r_gripper_palm_link")))
+           (expected (reference-paths before after sweeps)))
+      (urdf-proj::fill-sweep-paths (robot) before after sweeps)
+      (is (urdf-proj::same-state-p after (urdf-proj::robot-state-vectors (robot))))
+      (loop for s in sweeps for i from 0
+            do (is (equal (mapcar (lambda (step) (nth i step)) expected) (urdf-proj:sweep-path s))
+                   "path of ~a" (or (urdf-proj:sweep-moving-link s) (urdf-proj:sweep-moving s))))
+      ;; the stick moves: its path is no single point
+      (is (< 0.1 (cl-transforms:v-dist (apply #'cl-transforms:make-3d-vector (first (urdf-proj:sweep-path (second sweeps))))
+                                       (apply #'cl-transforms:make-3d-vector (car (last (urdf-proj:sweep-path (second sweeps)))))))))))
+
 ;;; ---- a seeded corpus against dense ground truth -----------------------------------------------
 
 (defun random-arm (state)

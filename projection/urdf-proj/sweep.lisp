@@ -133,6 +133,20 @@ touching items, and its carried objects touching anything."
                 unless (= b rh) do (push (list a la b lb) records)))))
     records))
 
+(defun arrival-candidate-p (world robot records)
+  "True when one of the sweep RECORDS (moving-object moving-link hit-object hit-link ...) could
+be a contact the motion arrives at on purpose (ARRIVAL-CONTACT-RECORDS): one of a carried
+object, or of a hand link of ROBOT with an item. Otherwise the contacts at the end need not be
+looked up."
+  (let ((rh (btr:object-handle robot)) (hands :unknown))
+    (loop for (mo ml ho) in records
+          thereis (or (/= mo rh)
+                      (and (>= ml 0)
+                           (typep (btr::object-by-handle world ho) 'btr:item)
+                           (member (btr::link-name-of robot ml)
+                                   (if (eq hands :unknown) (setf hands (all-hand-links robot)) hands)
+                                   :test #'string=))))))
+
 (defun ignore-link-records (robot links)
   (let ((rh (btr:object-handle robot)))
     (loop for l in links
@@ -168,27 +182,44 @@ touching items, and its carried objects touching anything."
 
 (defun fill-sweep-paths (robot before after sweeps)
   "Set the path of each of SWEEPS: its moving frame at 16 steps from BEFORE to AFTER (robot
-states); ROBOT is left where it is."
+states); ROBOT is left where it is. The robot is set to each step as it moves (base pose, then
+joints), and a link's frame is read from the native link pose: no pose objects per link."
   (let* ((now (robot-state-vectors robot))
-         (w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot))
+         (world (btr:world robot))
+         (w (btr:world-handle world)) (h (btr:object-handle robot))
          (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
-         (n (length (cdr before)))
+         (o0 (cl-transforms:origin b0)) (r0 (cl-transforms:orientation b0))
+         (r1 (cl-transforms:orientation b1))
+         (travel (cl-transforms:v- (cl-transforms:origin b1) o0))
+         (q0 (coerce (cdr before) 'cram-native::dvec))
+         (q1 (coerce (cdr after) 'cram-native::dvec))
+         (n (length q0))
          (indices (let ((v (make-array n :element-type '(signed-byte 32)))) (dotimes (i n v) (setf (aref v i) i))))
-         (q (make-array n :element-type 'double-float)))
+         (q (make-array n :element-type 'double-float))
+         (link-pose (make-array 7 :element-type 'double-float))
+         ;; per sweep: the index of its moving link, or NIL for a carried object
+         (links (mapcar (lambda (s) (and (sweep-moving-link s) (btr:link-index robot (sweep-moving-link s))))
+                        sweeps)))
+    (declare (type cram-native::dvec q0 q1 q link-pose) (type fixnum n))
     (dolist (s sweeps) (setf (sweep-path s) '()))
     (unwind-protect
          (loop for k from 0 to 16
-               for f = (/ k 16d0)
-               do (dotimes (i n) (setf (aref q i) (+ (aref (cdr before) i) (* f (- (aref (cdr after) i) (aref (cdr before) i))))))
+               for f of-type double-float = (/ k 16d0)
+               do (dotimes (i n)
+                    (setf (aref q i) (+ (aref q0 i) (* f (- (aref q1 i) (aref q0 i))))))
                   (cram-native:set-object-pose w h (btr::pose->vector
-                                               (cl-transforms:make-pose
-                                                (cl-transforms:v+ (cl-transforms:origin b0)
-                                                                  (cl-transforms:v* (cl-transforms:v- (cl-transforms:origin b1) (cl-transforms:origin b0)) f))
-                                                (cl-transforms:slerp (cl-transforms:orientation b0) (cl-transforms:orientation b1) f))))
+                                                    (cl-transforms:make-pose
+                                                     (cl-transforms:v+ o0 (cl-transforms:v* travel f))
+                                                     (cl-transforms:slerp r0 r1 f))))
                   (cram-native:set-robot-joints w h indices q)
-                  (dolist (s sweeps)
-                    (let ((p (moving-frame-point robot s)))
-                      (push (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p)) (sweep-path s)))))
+                  (loop for s in sweeps
+                        for link in links
+                        do (push (if link
+                                     (progn (cram-native:robot-link-pose w h link link-pose)
+                                            (list (aref link-pose 0) (aref link-pose 1) (aref link-pose 2)))
+                                     (let ((p (moving-frame-point robot s)))
+                                       (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p))))
+                                 (sweep-path s))))
       (restore-robot-state robot now))
     (dolist (s sweeps) (setf (sweep-path s) (nreverse (sweep-path s))))
     sweeps))
@@ -213,7 +244,8 @@ and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not
                                                   :ignore ignore :skip-start-contacts t)))
           ;; pairs are independent: the contacts arrived at on purpose (where the robot now is,
           ;; the end of the motion) are taken out afterwards
-          (when (and records (same-state-p after (robot-state-vectors robot)))
+          (when (and records (arrival-candidate-p world robot records)
+                     (same-state-p after (robot-state-vectors robot)))
             (let ((arrivals (arrival-contact-records world robot)))
               (setf records (remove-if (lambda (r) (member (subseq r 0 4) arrivals :test #'equal))
                                        records))))

@@ -47,27 +47,32 @@ pose, as MOVE-TCP does with its base offsets.")
 (defun poses-reachable-p (arm poses robot)
   "True when ARM of ROBOT has IK solutions for every tool pose of POSES from where it stands, or
 from the base shifted by one of *REACH-BASE-OFFSETS*, at one torso height for all of them (the
-current one first, then the others MOVE-TCP would try)."
+current one first, then the others MOVE-TCP would try). As MOVE-TCP, the wrist goals are made
+once from the tool poses, and the IK chain is looked up once."
   (let* ((base (btr:pose robot))
          (torso (urdf-proj:torso-joint))
          (torso-value (and torso (member torso (btr:joint-names robot) :test #'string=)
                            (btr:joint-state robot torso)))
-         (heights (or (and torso-value (urdf-proj::torso-candidates robot nil)) (list nil))))
+         (heights (or (and torso-value (urdf-proj::torso-candidates robot nil)) (list nil)))
+         (chain (urdf-proj::arm-ik-chain arm robot))
+         (end-effector (urdf-proj:end-effector-link arm))
+         (first-child (urdf-proj::first-joint-child chain robot))
+         (goals (mapcar (lambda (pose) (urdf-proj::tcp->ee-pose arm pose robot)) poses))
+         (bases (mapcar (lambda (dx)
+                          (translate-pose base (cl-transforms:rotate (cl-transforms:orientation base)
+                                                                     (cl-transforms:make-3d-vector dx 0 0))))
+                        *reach-base-offsets*)))
     (unwind-protect
          (some (lambda (height)
                  (when height
                    (btr:set-robot-state-from-joints (list (list torso height)) robot))
-                 (every (lambda (pose)
-                          (some (lambda (dx)
-                                  (setf (btr:pose robot)
-                                        (translate-pose base (cl-transforms:rotate
-                                                              (cl-transforms:orientation base)
-                                                              (cl-transforms:make-3d-vector dx 0 0))))
-                                  (urdf-proj:arm-ik arm (urdf-proj::tcp->ee-pose arm pose robot)
-                                                    :robot robot
-                                                    :max-restarts *reachability-ik-restarts*))
-                                *reach-base-offsets*))
-                        poses))
+                 (every (lambda (goal)
+                          (some (lambda (shifted)
+                                  (setf (btr:pose robot) shifted)
+                                  (urdf-proj::chain-ik-from-map chain end-effector first-child goal robot
+                                                                nil *reachability-ik-restarts*))
+                                bases))
+                        goals))
                heights)
       (setf (btr:pose robot) base)
       (when torso-value

@@ -97,6 +97,30 @@ arms parked; returns the grasp that works there. ENVIRONMENT-UNREACHABLE when th
                  :environment-designator designator
                  :arm arm :distance amount))
 
+(defun container-moving-parts (container)
+  "The (MOVING HIT) contact pairs (as URDF-PROJ:*SWEEP-ALLOWED-CONTACTS* takes them) of anything
+of the robot with what CONTAINER's joint moves: the links below the joint, and the objects
+attached to them (a cup on a dishwasher tray)."
+  (let* ((environment (container-environment container))
+         (name (btr:name environment))
+         (joint (gethash (container-joint container) (cl-urdf:joints (btr:urdf environment))))
+         (links (labels ((below (link)
+                           (cons (cl-urdf:name link)
+                                 (loop for j in (cl-urdf:child-joints link) append (below (cl-urdf:child j))))))
+                  (below (cl-urdf:child joint)))))
+    (append (mapcar (lambda (link) (list t (list name link))) links)
+            (loop for (object link) in (btr:attached-objects environment)
+                  when (member link links :test #'string=) collect (list t object)))))
+
+(defmacro with-container-moving ((container) &body body)
+  "Run BODY, a motion that moves CONTAINER with the hand (gripping its handle, pushing it),
+with the robot's contacts with what the container's joint moves allowed: in the belief state the
+container moves only after the motion (the container event), while in the motion it goes along
+with the hand, ahead of the arm."
+  `(let ((urdf-proj:*sweep-allowed-contacts*
+           (append (container-moving-parts ,container) urdf-proj:*sweep-allowed-contacts*)))
+     ,@body))
+
 (defun manipulate-with-grasp (container action arm grasp amount designator)
   "One attempt at ACTION of CONTAINER with ARM and the handle GRASP (see MANIPULATE-CONTAINER)."
   (let* ((trajectory (container-trajectory container action grasp amount))
@@ -116,13 +140,18 @@ arms parked; returns the grasp that works there. ENVIRONMENT-UNREACHABLE when th
       (perform-arm-motion :grasping arm (man-int:get-traj-poses-by-label trajectory :grasping)))
     (log-env 'manipulate-container "Gripping")
     (let ((?width (handle-grip-width container)))
-      (exe:perform (desig:an action (type setting-gripper) (gripper ?arm) (position ?width))))
+      (with-container-moving (container)
+        (exe:perform (desig:an action (type setting-gripper) (gripper ?arm) (position ?width)))))
     (when (handle-slipped-p arm)
       (cpl:fail 'common-fail:gripper-closed-completely :description "Handle slipped"))
     (log-env 'manipulate-container "~:[Closing~;Opening~]" (eq action :open))
     (handler-case
-        (perform-arm-motion (if (eq action :open) :pulling :pushing) arm
-                            (man-int:traj-segment-poses (third trajectory)))
+        (let ((poses (man-int:traj-segment-poses (third trajectory))))
+          ;; pulling: the container comes towards the arm, which its state after the motion
+          ;; does not show, so nothing is allowed
+          (if (eq action :open)
+              (perform-arm-motion :pulling arm poses)
+              (with-container-moving (container) (perform-arm-motion :pushing arm poses))))
       (common-fail:manipulation-low-level-failure (e)
         (exe:perform (desig:an action (type releasing) (gripper ?arm)))
         (cpl:fail 'common-fail:environment-manipulation-goal-not-reached
