@@ -64,6 +64,9 @@ variables with (UNIFY-TERMS M a b) and read them with DEREF-TERM or RESOLVE-TERM
 (defvar *lisp-error-propagating-functions* (make-hash-table :test 'eq :synchronized t)
   "Names of the functions registered with PROPAGATE-LISP-ERRORS.")
 
+(sb-ext:defglobal **propagating-names** #()
+  "The names of *LISP-ERROR-PROPAGATING-FUNCTIONS* as a vector, read without a lock.")
+
 (defun propagate-lisp-errors (&rest function-names)
   "Declare that errors signalled by the functions named FUNCTION-NAMES (symbols naming global
 functions) propagate out of the Prolog query when LISP-FUN or LISP-PRED calls them, whatever
@@ -77,9 +80,6 @@ Returns FUNCTION-NAMES."
     (setf **propagating-names**
           (coerce (loop for n being the hash-keys of *lisp-error-propagating-functions* collect n)
                   'simple-vector))))
-
-(sb-ext:defglobal **propagating-names** #()
-  "The names of *LISP-ERROR-PROPAGATING-FUNCTIONS* as a vector, read without a lock.")
 
 (defun lisp-errors-propagate-p (function)
   "True when errors from FUNCTION (a function object or a symbol) propagate out of queries. A

@@ -92,7 +92,7 @@
     (is (null (cram-prolog::heap-limit)))
     (is (not (null (prolog '(member ?x (1 2)))))))
   (let ((*prolog-heap-limit* "lots"))
-    (let ((e (handler-case (progn (force-ll (prolog '(member ?x (1 2)))) nil)
+    (let ((e (handler-case (progn (cut:force-ll (prolog '(member ?x (1 2)))) nil)
                (prolog-error (c) c))))
       (is (typep e 'prolog-error))
       (is (search "\"lots\"" (princ-to-string e)))

@@ -288,7 +288,12 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
          (goals-key (reach-goals-key goals)))
     (block search
       ;; the state found for the same goals before, when the base may go there from here
-      (let ((known (recall-reach-state robot goals-key base0 move-base torso fixed-torso)))
+      (let ((known (recall-reach-state robot goals-key base0
+                                      (if move-base
+                                          (reduce #'max (mapcar #'abs *base-offsets*)
+                                                  :initial-value 0d0)
+                                          0d0)
+                                      torso fixed-torso)))
         (when known
           (setf (btr:pose robot) (reach-state-base known))
           (btr:set-robot-state-from-joints (reach-state-joints known) robot)

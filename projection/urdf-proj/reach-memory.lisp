@@ -59,15 +59,13 @@ goals in full only when the hashes agree."
   (and (= (length a) (length b))
        (every (lambda (x y) (and (eq (car x) (car y)) (same-pose-7-p (cdr x) (cdr y)))) a b)))
 
-(defun base-within-offsets-p (base base0 move-base)
-  "True when the map pose BASE is one MOVE-TCP may put the base at from BASE0: BASE0 itself
-without MOVE-BASE, else BASE0 shifted (same heading) by at most the largest of
-*BASE-OFFSETS* along each of its axes."
+(defun base-within-offsets-p (base base0 reach)
+  "True when the map pose BASE is one MOVE-TCP may put the base at from BASE0: BASE0 shifted
+\(same heading) by at most REACH (metres, 0: BASE0 itself) along each of its axes."
   (let* ((rel (cl-transforms:transform*
                (cl-transforms:transform-inv (cl-transforms:pose->transform base0))
                (cl-transforms:pose->transform base)))
-         (d (cl-transforms:translation rel))
-         (reach (if move-base (reduce #'max (mapcar #'abs *base-offsets*) :initial-value 0d0) 0d0)))
+         (d (cl-transforms:translation rel)))
     (and (< (abs (cl-transforms:z d)) 1d-6)
          (< (cl-transforms:angle-between-quaternions (cl-transforms:rotation rel)
                                                      (cl-transforms:make-identity-rotation))
@@ -75,10 +73,10 @@ without MOVE-BASE, else BASE0 shifted (same heading) by at most the largest of
          (<= (abs (cl-transforms:x d)) (+ reach 1d-6))
          (<= (abs (cl-transforms:y d)) (+ reach 1d-6)))))
 
-(defun recall-reach-state (robot goals base0 move-base torso fixed-torso)
+(defun recall-reach-state (robot goals base0 reach torso fixed-torso)
   "The newest remembered REACH-STATE of ROBOT for GOALS (a REACH-GOALS-KEY) that MOVE-TCP may
-take from the base pose BASE0 (BASE-WITHIN-OFFSETS-P) and, with FIXED-TORSO, without moving
-the joint TORSO; NIL when there is none."
+take from the base pose BASE0, its base moving by at most REACH (BASE-WITHIN-OFFSETS-P) and,
+with FIXED-TORSO, without moving the joint TORSO; NIL when there is none."
   (let ((memory *reach-memory*))
     (when (and memory (reach-memory-entries memory))
       (let ((hash (goals-hash goals))
@@ -88,7 +86,7 @@ the joint TORSO; NIL when there is none."
                    (and (= (reach-state-hash e) hash)
                         (eq (reach-state-robot e) robot)
                         (same-goals-p (reach-state-goals e) goals)
-                        (base-within-offsets-p (reach-state-base e) base0 move-base)
+                        (base-within-offsets-p (reach-state-base e) base0 reach)
                         (or (not fixed-torso) (null torso)
                             (let ((v (second (assoc torso (reach-state-joints e) :test #'equal))))
                               (or (null v) (< (abs (- v (btr:joint-state robot torso))) 1d-9))))))

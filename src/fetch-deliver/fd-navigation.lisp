@@ -25,6 +25,24 @@ a pose already judged in the same state is not checked again.")
 
 (defvar *base-pose-verdicts-lock* (sb-thread:make-mutex :name "base pose verdicts"))
 
+(defun base-pose-verdicts-p ()
+  "True within WITH-BASE-POSE-VERDICTS."
+  (and *base-pose-verdicts* t))
+
+(defun base-pose-verdict (key)
+  "What *BASE-POSE-VERDICTS* keeps under KEY (NIL: nothing, or outside WITH-BASE-POSE-VERDICTS);
+second value: whether it keeps anything."
+  (if *base-pose-verdicts*
+      (sb-thread:with-mutex (*base-pose-verdicts-lock*) (gethash key *base-pose-verdicts*))
+      (values nil nil)))
+
+(defun (setf base-pose-verdict) (value key)
+  "Keep VALUE under KEY in *BASE-POSE-VERDICTS* (nothing outside WITH-BASE-POSE-VERDICTS)."
+  (when *base-pose-verdicts*
+    (sb-thread:with-mutex (*base-pose-verdicts-lock*)
+      (setf (gethash key *base-pose-verdicts*) value)))
+  value)
+
 (defmacro with-base-pose-verdicts (() &body body)
   "Run BODY with a fresh *BASE-POSE-VERDICTS* table (kept when one is already bound)."
   `(let ((*base-pose-verdicts* (or *base-pose-verdicts* (make-hash-table :test 'equal))))
@@ -50,17 +68,13 @@ ACCEPTED, NIL unless it is free there and ACCEPT (a function of the pose) accept
 ACCEPT's value). A pose judged before within *BASE-POSE-VERDICTS* for the same robot joints
 and WHAT (a list naming what ACCEPT checks) gives the same verdict without a check."
   (let ((key (and *base-pose-verdicts* (list* (base-pose-key pose) (robot-joints-key) what))))
-    (multiple-value-bind (verdict found)
-        (if key
-            (sb-thread:with-mutex (*base-pose-verdicts-lock*) (gethash key *base-pose-verdicts*))
-            (values nil nil))
+    (multiple-value-bind (verdict found) (if key (base-pose-verdict key) (values nil nil))
       (if found
           (values (car verdict) (cdr verdict))
           (let* ((hits (base-pose-collisions pose))
                  (accepted (and (null hits) (or (funcall accept pose) nil))))
             (when key
-              (sb-thread:with-mutex (*base-pose-verdicts-lock*)
-                (setf (gethash key *base-pose-verdicts*) (cons accepted hits))))
+              (setf (base-pose-verdict key) (cons accepted hits)))
             (values accepted hits))))))
 
 (defun check-navigating-collisions (location &key (accept (constantly t)) what)

@@ -368,17 +368,14 @@ back. Within WITH-BASE-POSE-VERDICTS, a check while *REQUIRE-ROOM* is true that 
 sample leaving the later objects room keeps what it would have taken without that requirement
 \(or that nothing could be put down), and the check of the same base pose, robot state and
 place without the requirement answers from that instead of drawing samples again."
-  (let* ((key (and *base-pose-verdicts* (placing-fallback-key object arm target pose)))
-         (kept (and key (not *require-room*)
-                    (sb-thread:with-mutex (*base-pose-verdicts-lock*)
-                      (gethash key *base-pose-verdicts*)))))
+  (let* ((key (and (base-pose-verdicts-p) (placing-fallback-key object arm target pose)))
+         (kept (and key (not *require-room*) (base-pose-verdict key))))
     (cond ((eq kept :none) nil)
           (kept (cl-transforms-stamped:pose->pose-stamped cram-tf:*fixed-frame* 0d0 kept))
           (t (let* ((*placing-fallback* (and key *require-room* (list nil)))
                     (found (check-placing-from object arm target pose)))
                (when (and *placing-fallback* (car *placing-fallback*))
-                 (sb-thread:with-mutex (*base-pose-verdicts-lock*)
-                   (setf (gethash key *base-pose-verdicts*) (car *placing-fallback*))))
+                 (setf (base-pose-verdict key) (car *placing-fallback*)))
                found)))))
 
 (defun check-placing-from (object arm target pose)

@@ -114,6 +114,12 @@ TASK-EXIT-ERROR naming TASK, so the thread is never unwound past its base."
           (error 'task-exit-error :task-name (task-name task))
           (values-list (cdr result))))))
 
+(defvar *task-in-caller-thread* nil
+  "The task RUN-TASK-HERE runs in the thread of its caller (a REPL, a program): that thread's
+stack is the caller's, so a non-local exit out of the task's own body (leaving the debugger for
+the REPL's top level, a THROW to the caller's CATCH) unwinds it as in Lisp; exits out of its
+child tasks' threads remain TASK-EXIT-ERRORs.")
+
 (defun execute-task (task thunk node)
   "The body of a task thread: run THUNK, classify the outcome, report it."
   (let ((status :evaporated) (values '()) (failure nil) (leaving nil))
@@ -259,12 +265,6 @@ and all threads joined before this returns. Returns the decision."
 (defun resignal-failure (condition)
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
-
-(defvar *task-in-caller-thread* nil
-  "The task RUN-TASK-HERE runs in the thread of its caller (a REPL, a program): that thread's
-stack is the caller's, so a non-local exit out of the task's own body (leaving the debugger for
-the REPL's top level, a THROW to the caller's CATCH) unwinds it as in Lisp; exits out of its
-child tasks' threads remain TASK-EXIT-ERRORs.")
 
 (defun run-task-here (name group thunk node)
   "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's

@@ -4,6 +4,9 @@
 
 (in-package :cram-ros-pms)
 
+(defvar *motion-timeout* 60
+  "Seconds a joint motion may take at most before its goal-not-reached failure.")
+
 (defvar *connect-timeout* 10
   "Seconds WITH-REAL-ROBOT waits for the first /joint_states and TF of the robot, and a command
 publisher for its controller to connect.")

@@ -3,9 +3,6 @@
 
 (in-package :cram-ros-pms)
 
-(defvar *motion-timeout* 60
-  "Seconds a joint motion may take at most before its goal-not-reached failure.")
-
 (defvar *stall-timeout* 2
   "Seconds the joints of a commanded group may stand still away from the goal before its
 goal-not-reached failure (a controller that refused the command, or a blocked joint).")
