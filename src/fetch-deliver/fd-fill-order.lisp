@@ -19,9 +19,10 @@ pre-check (CHECK-PLACING-COLLISIONS) takes, of the samples that pass, the first 
 each of these places room within the robot's reach (ROOM-LEFT); when none leaves every place
 room, the one that leaves the most places room.")
 
-(defparameter *room-needed* 0.0025d0
+(defparameter *room-needed* 0.01d0
   "Square metres of free places (cells of a later object's costmap within the robot's reach)
-that count as room for that object.")
+that count as room for that object: 100 cm², so that the later object's own checks (reach,
+collisions, grasping it again) still find a place among them.")
 
 (defun later-places (destination context)
   "The destinations in CONTEXT (from the object knowledge) of *DELIVERIES-TO-COME* that are
