@@ -609,6 +609,11 @@ sink behind it; either way the held object ends where it was, attached to the sa
                                        (lambda () (fd-plans::check-picking-up-collisions bottle)))))
         (is (<= coarse-solves full-solves) "~d IK solutions with the coarse candidates first, ~d without"
             coarse-solves full-solves)))
+    (is (equal (fd-plans::check-picking-up-collisions bottle :any :coarse)
+               (fd-plans::check-picking-up-collisions bottle :any t))
+        "the coarse candidates alone find the same grasp here")
     (setf (btr:pose robot) (pp-plans:pose-in-map (apply #'pose *robot-at-sink*)))
     (signals common-fail:object-unreachable
-      (fd-plans::check-picking-up-collisions bottle :any t))))
+      (fd-plans::check-picking-up-collisions bottle :any t))
+    (signals common-fail:object-unreachable
+      (fd-plans::check-picking-up-collisions bottle :any :coarse))))

@@ -73,7 +73,8 @@ up to *PICKING-UP-CHECK-SAMPLES*; signals OBJECT-UNREACHABLE when none does. Wit
 only whether some grasp is reachable matters) the grasps are first tried with the pre-checks'
 coarse base offsets and torso heights, which find a reachable grasp sooner when there is one
 (the coarse candidates are some of the full ones), and only when none is found there with all
-candidates: the answer can then be another grasp than the first reachable one."
+candidates: the answer can then be another grasp than the first reachable one. ANY :COARSE
+tries the coarse candidates only."
   (let* ((?object object)
          (groundings (pp-plans:ground-action
                       :picking-up (desig:an action (type picking-up) (object ?object))))
@@ -95,7 +96,7 @@ candidates: the answer can then be another grasp than the first reachable one."
                                                       '(:grasping) :coarse coarse))))
                      (return-from check-picking-up-collisions (list arm grasp))))))))
       (when any (try t))
-      (try nil))
+      (unless (eq any :coarse) (try nil)))
     (cpl:fail 'common-fail:object-unreachable
               :description (format nil "No grasp of ~a with the ~{~(~a~)~^ or ~} arm is reachable ~
                                         free of collisions from here (~d tried)."
@@ -324,12 +325,15 @@ the belief state; the robot is put back."
 
 (defun object-graspable-from-p (object pose &key arms grasps)
   "True when the robot, standing at POSE (map), reaches a grasp of OBJECT with one of ARMS and
-GRASPS (NIL: any) free of collisions (CHECK-PICKING-UP-COLLISIONS). Checked in the belief
-state; the robot is put back."
+GRASPS (NIL: any) free of collisions with the pre-checks' coarse base offsets and torso heights
+\(CHECK-PICKING-UP-COLLISIONS :ANY :COARSE): a base pose from which a grasp needs the base
+moved farther or the torso at a height between those is passed over for the next one, which
+costs less than searching every candidate of every grasp where none is reachable. Checked in the
+belief state; the robot is put back."
   (call-restoring-robot
    (lambda ()
      (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
-     (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps :any t) t)
+     (handler-case (progn (check-picking-up-collisions object :arms arms :grasps grasps :any :coarse) t)
        (common-fail:object-unreachable () nil)))))
 
 (defparameter *placing-base-check-samples* 12
