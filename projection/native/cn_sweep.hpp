@@ -177,5 +177,10 @@ inline void link_chain(const Model &m, int link, std::vector<int> &out) {
 double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
                        double maxd);
 
+// Whether the convex A (at TA; null: A's frame is the world's) may touch the collision object
+// OTHER: false only when every piece of OTHER near A is proven apart from it (an axis with a
+// gap between their support points), true otherwise.
+bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other);
+
 }  // namespace sweep
 }  // namespace cn

@@ -136,7 +136,7 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
     btVector3 lo, hi;
     hull.getAabb(btTransform::getIdentity(), lo, hi);
     if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
-    if (convex_distance(&hull, btTransform::getIdentity(), other, 1e-9) <= 0) return true;
+    if (may_touch(&hull, nullptr, other)) return true;
   }
   return false;
 }
