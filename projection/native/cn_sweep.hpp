@@ -97,6 +97,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   const std::vector<int> *chain = nullptr;  // movable joints from the root to frame_link
   Span pieces;
   int anchor = -1;                // last link on the chain a changing joint moves (-1: the base)
+  int anchor_ix = 0;              // its entry in a slot's anchor poses (0: the base)
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
@@ -143,6 +144,9 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<int> anchors;               // the movers' distinct anchors
+  std::vector<btTransform> slot_anchor;   // per slot: the base, then the anchors' poses
+  std::vector<char> slot_have;            // per slot and mover: pose and box computed
   std::vector<std::vector<int>> pool;
 };
 
