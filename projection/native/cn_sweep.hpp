@@ -123,9 +123,18 @@ struct Hit {
 struct Cand {
   double lo[3], hi[3];  // the body's broadphase box
   double clear_until;   // the pair cannot touch before this time
+  double dist, dist_max;  // the distance at sub-step point dist_k, searched up to dist_max
+  int dist_k;           // (-1: none kept)
   int found;            // the body: entry of Scratch::found
   char done;            // reported, or left out as a start contact
   // whether the box LO HI meets the body's (TestAabbAgainstAabb2: touching boxes meet)
+  // The distance at sub-step point K searched up to MAXD, as distance_at would give it, when
+  // the one kept answers it; NaN otherwise.
+  double kept_distance(int k, double maxd) const {
+    if (dist_k != k) return NAN;
+    if (dist < dist_max) return std::min(dist, maxd);  // the distance itself
+    return maxd <= dist_max ? maxd : NAN;               // farther than dist_max
+  }
   bool meets(const btVector3 &l, const btVector3 &h) const {
     return !(l.x() > hi[0] || h.x() < lo[0]) && !(l.y() > hi[1] || h.y() < lo[1]) &&
            !(l.z() > hi[2] || h.z() < lo[2]);

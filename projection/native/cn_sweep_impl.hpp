@@ -125,6 +125,9 @@ struct Sweep {
 
   void report(const Mover &m, const btCollisionObject *other, double t, const btVector3 &point);
 
+  Cand *kept = nullptr;  // the pair confirm searches in a sub-step, which keeps the distance
+  int kept_k = 0;        // at its end (sub-step point kept_k) for the next sub-step
+
   bool base_moves = false;
 
   template <class F>

@@ -122,6 +122,7 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
         x.hi[k] = found.hi[f][k];
       }
       x.clear_until = 0;
+      x.dist_k = -1;
       x.found = (int)f;
       x.done = 0;
     }
@@ -191,7 +192,14 @@ double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta,
   if (da <= 0 && touches(m, pa, path + tol, other, da, point)) return ta;
   if (da > path) return -1;
   bool leaf = path <= tol || depth > 40;
-  if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
+  if (std::isnan(db)) {
+    db = distance_at(m, pb, path + tol, other);
+    if (depth == 0 && db > 0 && kept) {  // the next sub-step starts there
+      kept->dist = db;
+      kept->dist_max = path + tol;
+      kept->dist_k = kept_k;
+    }
+  }
   if (db > 0) {
     if (leaf || da + db > path) return -1;
     if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
@@ -279,7 +287,8 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
     // apart by d at ta stays apart until ta + d / B
     if (ta >= x.clear_until) {
       double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
-      double d = distance_at(m, slot_pose[a], probe_d, other);
+      double d = x.kept_distance(ka, probe_d);
+      if (std::isnan(d)) d = distance_at(m, slot_pose[a], probe_d, other);
       btVector3 point;
       bool touch = d <= 0 && touches(m, slot_pose[a], probe_d, other, d, point);
       if (ka == 0 && skip_start && d <= tol) {
@@ -294,10 +303,15 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
       x.clear_until = ta + d / m.B;
       if (tb <= x.clear_until) continue;
       known = d;
+    } else {
+      known = x.kept_distance(ka, h * m.B + tol);
     }
     double db = NAN;
     btVector3 point;
+    kept = &x;
+    kept_k = kb;
     double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, 0, point);
+    kept = nullptr;
     if (t < 0) continue;
     x.done = 1;
     report(m, other, t, point);
