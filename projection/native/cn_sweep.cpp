@@ -222,8 +222,10 @@ void Sweep::mark_needed(F link_of) {
 // are computed along the move.
 void Sweep::set_anchors(const std::vector<btTransform> &lp0) {
   any_anchor = false;
+  anchors.clear();
   for (Mover &m : movers) {
     m.anchor = -1;
+    m.anchor_ix = 0;
     if (!robot || m.frame_link < 0) {
       m.rel_anchor = m.rel;
       continue;
@@ -232,6 +234,11 @@ void Sweep::set_anchors(const std::vector<btTransform> &lp0) {
       if (dv[j] != 0) m.anchor = robot->model->joints[j].child;
     any_anchor |= m.anchor >= 0;
     m.rel_anchor = (m.anchor >= 0 ? lp0[m.anchor] : base0).inverseTimes(lp0[m.frame_link] * m.rel);
+    if (m.anchor >= 0) {
+      auto it = std::find(anchors.begin(), anchors.end(), m.anchor);
+      m.anchor_ix = 1 + (int)(it - anchors.begin());
+      if (it == anchors.end()) anchors.push_back(m.anchor);
+    }
   }
 }
 

@@ -97,6 +97,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   const std::vector<int> *chain = nullptr;  // movable joints from the root to frame_link
   Span pieces;
   int anchor = -1;                // last link on the chain a changing joint moves (-1: the base)
+  int anchor_ix = 0;              // its entry in a slot's anchor poses (0: the base)
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
@@ -122,9 +123,18 @@ struct Hit {
 struct Cand {
   double lo[3], hi[3];  // the body's broadphase box
   double clear_until;   // the pair cannot touch before this time
+  double dist, dist_max;  // the distance at sub-step point dist_k, searched up to dist_max
+  int dist_k;           // (-1: none kept)
   int found;            // the body: entry of Scratch::found
   char done;            // reported, or left out as a start contact
   // whether the box LO HI meets the body's (TestAabbAgainstAabb2: touching boxes meet)
+  // The distance at sub-step point K searched up to MAXD, as distance_at would give it, when
+  // the one kept answers it; NaN otherwise.
+  double kept_distance(int k, double maxd) const {
+    if (dist_k != k) return NAN;
+    if (dist < dist_max) return std::min(dist, maxd);  // the distance itself
+    return maxd <= dist_max ? maxd : NAN;               // farther than dist_max
+  }
   bool meets(const btVector3 &l, const btVector3 &h) const {
     return !(l.x() > hi[0] || h.x() < lo[0]) && !(l.y() > hi[1] || h.y() < lo[1]) &&
            !(l.z() > hi[2] || h.z() < lo[2]);
@@ -143,6 +153,9 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<int> anchors;               // the movers' distinct anchors
+  std::vector<btTransform> slot_anchor;   // per slot: the base, then the anchors' poses
+  std::vector<char> slot_have;            // per slot and mover: pose and box computed
   std::vector<std::vector<int>> pool;
 };
 
@@ -176,6 +189,11 @@ inline void link_chain(const Model &m, int link, std::vector<int> &out) {
 // A at TA and the collision object OTHER; <= 0 when they touch (not a penetration depth).
 double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
                        double maxd);
+
+// Whether the convex A (at TA; null: A's frame is the world's) may touch the collision object
+// OTHER: false only when every piece of OTHER near A is proven apart from it (an axis with a
+// gap between their support points), true otherwise.
+bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other);
 
 }  // namespace sweep
 }  // namespace cn

@@ -115,12 +115,18 @@ struct Sweep {
 
   Closest distance(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other);
 
-  double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
-                     btVector3 *point = nullptr);
+  double distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other);
+
+  bool touches(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+               double &d, btVector3 &point);
 
   double confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
-                 double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
-                 int depth);
+                 double &da, double tb, const btTransform &pb, double &db, int depth, btVector3 &point);
+
+  void report(const Mover &m, const btCollisionObject *other, double t, const btVector3 &point);
+
+  Cand *kept = nullptr;  // the pair confirm searches in a sub-step, which keeps the distance
+  int kept_k = 0;        // at its end (sub-step point kept_k) for the next sub-step
 
   bool base_moves = false;
 
@@ -150,7 +156,25 @@ struct Sweep {
   std::vector<btVector3> &slot_lo = sc.slot_lo, &slot_hi = sc.slot_hi;  // per slot, one box per mover
   std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
 
+  std::vector<int> &anchors = sc.anchors;                // distinct anchors (Mover::anchor_ix - 1)
+  std::vector<btTransform> &slot_anchor = sc.slot_anchor;  // per slot, 1 + anchors.size() poses
+  std::vector<char> &slot_have = sc.slot_have;           // per slot and mover
+
   int slot(int k);
+
+  // The entry of mover I's pose and box at time k / n in slot_pose, slot_lo, slot_hi: computed
+  // when first asked for, from the slot's anchor poses.
+  size_t slot_entry(int k, size_t i) {
+    size_t at = (size_t)slot(k) * movers.size() + i;
+    if (!slot_have[at]) {
+      const Mover &m = movers[i];
+      size_t sl = at / movers.size();
+      slot_pose[at] = slot_anchor[sl * (anchors.size() + 1) + m.anchor_ix] * m.rel_anchor;
+      m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+      slot_have[at] = 1;
+    }
+    return at;
+  }
 
   void descend(size_t i, int ka, int kb, int depth);
 };

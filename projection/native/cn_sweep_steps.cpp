@@ -2,11 +2,12 @@
 // the entry points are in cn_sweep.cpp): the candidates each mover may meet, the time hierarchy
 // descended by halving, and the confirmation of a touching hull by distances.
 //
-// A hull that touches another object is confirmed by halving the interval on distances: an
-// interval whose pieces cannot reach the object (distance at its start beyond its path bound)
-// is clear, one whose start is at or below distance 0 is the first contact. A pair is reported
-// only where a computed distance is <= 0, and missed only when it never penetrates deeper than
-// `tolerance`. The sub-steps (a power of two) are visited from the whole move down by halving,
+// A sub-step that may hold a contact is searched by halving the interval on distances: an
+// interval whose pieces cannot reach the object (distance at its start beyond its path bound,
+// or its hull apart from it) is clear, one whose start is at or below distance 0 is the first
+// contact. A pair is reported only where the computed distance is <= 0 and Bullet's contact
+// query (the discrete checks') agrees, and missed only when it never penetrates deeper than
+// `tolerance`; the contact query is asked only there, for its verdict and the contact point. The sub-steps (a power of two) are visited from the whole move down by halving,
 // each mover's box over an interval sorting out the candidates it can meet there; a pair found
 // apart by d is not looked at again before the move could have closed d (conservative
 // advancement).
@@ -121,6 +122,7 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
         x.hi[k] = found.hi[f][k];
       }
       x.clear_until = 0;
+      x.dist_k = -1;
       x.found = (int)f;
       x.done = 0;
     }
@@ -136,7 +138,7 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
     btVector3 lo, hi;
     hull.getAabb(btTransform::getIdentity(), lo, hi);
     if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
-    if (convex_distance(&hull, btTransform::getIdentity(), other, 1e-9) <= 0) return true;
+    if (may_touch(&hull, nullptr, other)) return true;
   }
   return false;
 }
@@ -149,70 +151,86 @@ Closest Sweep::distance(const Mover &m, const btTransform &t, double maxd, const
   return c;
 }
 
-// The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther): from GJK
-// on its pieces, and where that finds a touch, from Bullet's contact query, which also gives
-// the POINT of contact (the one the discrete checks use).
-double Sweep::distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
-                          btVector3 *point) {
+// The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther), from GJK on
+// its pieces; <= 0 when they touch.
+double Sweep::distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
   double d = maxd;
   for (const Piece &p : m.pieces) {
     d = std::min(d, convex_distance(p.shape, t * p.local, other, d));
     if (d <= 0) break;
   }
-  if (d > 0) return d;
-  Closest c = distance(m, t, maxd, other);
-  if (point) *point = c.point;
-  return c.found ? c.best : maxd;
+  return d;
 }
 
-// Earliest time in [ta, tb] at which M touches OTHER (distance <= 0), or -1. DA and DB are
-// the distances at the ends, NaN while unknown (computed here and handed on). The distance
-// changes no faster than the mover's points move, so an interval is clear when its hull
-// misses OTHER, or when DA + DB exceeds its path bound (going down to 0 and back up again
-// needs at least that much motion).
+// Whether M at pose T touches OTHER by Bullet's contact query (the discrete checks' verdict),
+// asked where GJK finds them touching: true with the contact's POINT; false with the query's
+// distance in D (MAXD when it finds nothing within MAXD). The two disagree by up to a tenth of
+// a millimetre on grazing contacts with cylinders.
+bool Sweep::touches(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                    double &d, btVector3 &point) {
+  Closest c = distance(m, t, maxd, other);
+  if (c.found && c.best <= 0) {
+    point = c.point;
+    return true;
+  }
+  d = c.found ? c.best : maxd;
+  return false;
+}
+
+// Earliest time in [ta, tb] at which M touches OTHER, or -1; POINT: where. DA and DB are the
+// distances at the ends, NaN while unknown (computed here and handed on). The distance changes
+// no faster than the mover's points move, so an interval is clear when DA + DB exceeds its path
+// bound (going down to 0 and back up again needs at least that much motion), or when its hull
+// misses OTHER (asked only when the distances leave it open). Halving, the earliest point of the
+// halving grid where the distance is <= 0 is found; a touch is confirmed by the contact query
+// only where it is the answer.
 double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
-                      double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
-                      int depth) {
+                      double &da, double tb, const btTransform &pb, double &db, int depth, btVector3 &point) {
   double h = tb - ta;
   double path = h * m.B;
-  if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
-  if (std::isnan(da))
-    da = distance_at(m, pa, path + tol, other, &point);
-  else if (da <= 0)  // found by the interval before, which did not ask for the point
-    distance_at(m, pa, path + tol, other, &point);
-  if (da <= 0) return ta;
+  if (std::isnan(da)) da = distance_at(m, pa, path + tol, other);
+  if (da <= 0 && touches(m, pa, path + tol, other, da, point)) return ta;
   if (da > path) return -1;
-  if (std::isnan(db)) db = distance_at(m, pb, path + tol, other);
-  if (db > 0 && da + db > path) return -1;
-  if (path <= tol || depth > 40) {
-    if (db > 0) return -1;
-    distance_at(m, pb, tol, other, &point);
-    return tb;
+  bool leaf = path <= tol || depth > 40;
+  if (std::isnan(db)) {
+    db = distance_at(m, pb, path + tol, other);
+    if (depth == 0 && db > 0 && kept) {  // the next sub-step starts there
+      kept->dist = db;
+      kept->dist_max = path + tol;
+      kept->dist_k = kept_k;
+    }
+  }
+  if (db > 0) {
+    if (leaf || da + db > path) return -1;
+    if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
+  } else if (leaf) {
+    return touches(m, pb, tol, other, db, point) ? tb : -1;
   }
   double tm = 0.5 * (ta + tb), dm = NAN;
   btTransform pm = pose_at(m, tm);
-  double r = confirm(m, other, ta, pa, da, tm, pm, dm, point, depth + 1);
-  return r >= 0 ? r : confirm(m, other, tm, pm, dm, tb, pb, db, point, depth + 1);
+  double r = confirm(m, other, ta, pa, da, tm, pm, dm, depth + 1, point);
+  return r >= 0 ? r : confirm(m, other, tm, pm, dm, tb, pb, db, depth + 1, point);
 }
 
-// The slot of the movers' poses and boxes at time k / n (computed once).
+// The slot of time k / n: the base and the movers' anchors there (computed once); the movers'
+// poses and boxes follow when asked for (slot_entry).
 int Sweep::slot(int k) {
   if (point_slot[k] >= 0) return point_slot[k];
-  size_t nm = movers.size();
+  size_t nm = movers.size(), na = anchors.size() + 1;
   int sl = n_slots++;
   point_slot[k] = sl;
   slot_pose.resize((sl + 1) * nm);
   slot_lo.resize((sl + 1) * nm);
   slot_hi.resize((sl + 1) * nm);
+  slot_have.resize((sl + 1) * nm);
+  std::fill(slot_have.begin() + sl * nm, slot_have.end(), 0);
+  slot_anchor.resize((sl + 1) * na);
   double t = (double)k / n;
-  btTransform base = base_at(t);
-  if (robot && any_anchor) fk(t, base);
-  for (size_t i = 0; i < nm; ++i) {
-    const Mover &m = movers[i];
-    if (m.nc == 0) continue;
-    size_t at = sl * nm + i;
-    slot_pose[at] = m.anchor < 0 ? base * m.rel_anchor : lp[m.anchor] * m.rel_anchor;
-    m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+  btTransform *poses = &slot_anchor[sl * na];
+  poses[0] = base_at(t);
+  if (robot && any_anchor) {
+    fk(t, poses[0]);
+    for (size_t a = 1; a < na; ++a) poses[a] = lp[anchors[a - 1]];
   }
   return sl;
 }
@@ -222,8 +240,7 @@ int Sweep::slot(int k) {
 // grown by the path bound) go down to halves, and at single sub-steps to the checks.
 void Sweep::descend(size_t i, int ka, int kb, int depth) {
   Mover &m = movers[i];
-  size_t nm = movers.size();
-  size_t a = slot(ka) * nm + i, b = slot(kb) * nm + i;
+  size_t a = slot_entry(ka, i), b = slot_entry(kb, i);
   double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
   double grow = 3 * h * h * m.W * m.B / 8, path = h * m.B;
   btVector3 lo = slot_lo[a], hi = slot_hi[a];
@@ -270,32 +287,41 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
     // apart by d at ta stays apart until ta + d / B
     if (ta >= x.clear_until) {
       double probe_d = std::max(tol, std::min(0.25, 4 * h * m.B));
-      btVector3 at_point;
-      double d = distance_at(m, slot_pose[a], probe_d, other, &at_point);
+      double d = x.kept_distance(ka, probe_d);
+      if (std::isnan(d)) d = distance_at(m, slot_pose[a], probe_d, other);
+      btVector3 point;
+      bool touch = d <= 0 && touches(m, slot_pose[a], probe_d, other, d, point);
       if (ka == 0 && skip_start && d <= tol) {
         x.done = 1;
         continue;
       }
-      if (d <= 0) {  // touching at ta
+      if (touch) {  // touching at ta
         x.done = 1;
-        int ob, lb;
-        decode_rb(other, ob, lb);
-        hits.push_back({m.obj, m.link, ob, lb, ta, at_point});
+        report(m, other, ta, point);
         continue;
       }
       x.clear_until = ta + d / m.B;
       if (tb <= x.clear_until) continue;
       known = d;
+    } else {
+      known = x.kept_distance(ka, h * m.B + tol);
     }
-    btVector3 point(0, 0, 0);
     double db = NAN;
-    double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, point, 0);
+    btVector3 point;
+    kept = &x;
+    kept_k = kb;
+    double t = confirm(m, other, ta, slot_pose[a], known, tb, slot_pose[b], db, 0, point);
+    kept = nullptr;
     if (t < 0) continue;
     x.done = 1;
-    int ob, lb;
-    decode_rb(other, ob, lb);
-    hits.push_back({m.obj, m.link, ob, lb, t, point});
+    report(m, other, t, point);
   }
+}
+
+void Sweep::report(const Mover &m, const btCollisionObject *other, double t, const btVector3 &point) {
+  int ob, lb;
+  decode_rb(other, ob, lb);
+  hits.push_back({m.obj, m.link, ob, lb, t, point});
 }
 
 }  // namespace sweep

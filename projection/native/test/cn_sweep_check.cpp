@@ -37,6 +37,68 @@ static Rec robot_sweep(int w, int r, const double *q0, const double *q1, const i
   return rec;
 }
 
+// A two-link arm of boxes standing far from the world's origin among thin plates and boxes:
+// seeded random moves against dense sampling of each link's path. Every pair that gets deeper
+// than the tolerance (1 mm) somewhere is reported, no later than that place. Returns the
+// number of pairs reported.
+static const char *ARM =
+    "<robot name='arm'><link name='base'/>"
+    "<link name='upper'><collision><origin xyz='0.3 0 0'/><geometry><box size='0.6 0.05 0.05'/></geometry></collision></link>"
+    "<link name='fore'><collision><origin xyz='0.2 0 0'/><geometry><box size='0.4 0.04 0.04'/></geometry></collision></link>"
+    "<joint name='yaw' type='revolute'><parent link='base'/><child link='upper'/><origin xyz='0 0 0.5'/><axis xyz='0 0 1'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "<joint name='pitch' type='revolute'><parent link='upper'/><child link='fore'/><origin xyz='0.6 0 0'/><axis xyz='0 1 0'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "</robot>";
+
+static int far_from_origin() {
+  int w = cn_world_create(0, 0, -9.81);
+  const double bx = 6.0, by = -4.0;
+  double base[7] = {bx, by, 0, 0, 0, std::sin(0.3), std::cos(0.3)};
+  int r = cn_robot_add_urdf(w, ARM, base, 0);
+  CHECK(r == 0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<int> bodies;
+  for (int i = 0; i < 8; ++i) {  // plates 6 mm thick (thinner than a sub-step's path) and boxes
+    double a = M_PI * u(rng), rad = 0.55 + 0.35 * (u(rng) + 1) / 2;
+    double yaw = M_PI * u(rng);
+    double pose[7] = {bx + rad * std::cos(a), by + rad * std::sin(a), 0.5 + 0.25 * u(rng), 0, 0,
+                      std::sin(yaw / 2), std::cos(yaw / 2)};
+    bodies.push_back(i % 2 ? cn_body_add_box(w, pose, 0.006, 0.3, 0.3, 0)
+                           : cn_body_add_box(w, pose, 0.08, 0.08, 0.08, 0));
+  }
+  int js[2] = {0, 1}, reported = 0, missed = 0, late = 0;
+  const int samples = 1500;
+  for (int trial = 0; trial < 40; ++trial) {
+    double a[2] = {2.8 * u(rng), 1.2 * u(rng)}, c[2] = {2.8 * u(rng), 1.2 * u(rng)};
+    Rec s;
+    s.n = cn_robot_sweep_check(w, r, base, a, base, c, 2, nullptr, 0, 0.05, 1e-3, 0, s.i4, s.d4, 16);
+    CHECK(s.n >= 0 && s.n <= 16);
+    reported += s.n;
+    for (int link = 1; link <= 2; ++link)
+      for (int body : bodies) {
+        double first_deep = -1;  // the first sampled time deeper than the tolerance
+        for (int i = 0; i <= samples && first_deep < 0; ++i) {
+          double t = (double)i / samples, q[2] = {a[0] + t * (c[0] - a[0]), a[1] + t * (c[1] - a[1])};
+          cn_robot_set_joints(w, r, js, q, 2);
+          double out7[7];
+          if (cn_closest_distance(w, r, link, body, -1, 0.1, out7) == 1 && out7[0] < -1e-3) first_deep = t;
+        }
+        if (first_deep < 0) continue;
+        int k = 0;
+        while (k < s.n && !(s.i4[4 * k + 1] == link && s.i4[4 * k + 2] == body)) ++k;
+        if (k == s.n)
+          ++missed;
+        else if (s.d4[4 * k] > first_deep + 1e-9)
+          ++late;
+      }
+  }
+  CHECK(missed == 0);
+  CHECK(late == 0);
+  CHECK(reported > 10);
+  CHECK(cn_world_destroy(w) == 0);
+  return reported;
+}
+
 int main() {
   int w = cn_world_create(0, 0, -9.81);
   int r = cn_robot_add_urdf(w, BAR, ID, 0);
@@ -205,7 +267,9 @@ int main() {
   CHECK(hits > 5 && hits < 55);
 
   CHECK(cn_world_destroy(w) == 0);
-  printf("cn_sweep_check: %d checks, %d failed (random corpus: %d of 60 moves hit)\n", checks,
-         failures, hits);
+
+  int far_hits = far_from_origin();
+  printf("cn_sweep_check: %d checks, %d failed (random corpus: %d of 60 moves hit; far from the "
+         "origin: %d pairs)\n", checks, failures, hits, far_hits);
   return failures ? 1 : 0;
 }
