@@ -49,51 +49,34 @@ btVector3 nearest_on_triangle(btVector3 *s, int &n) {
   // the regions of the triangle a b c around the origin p (Ericson, Real-Time Collision
   // Detection, 5.1.5)
   btVector3 a = s[0], b = s[1], c = s[2];
+  // the simplex shrinks to the vertex or the edge whose region holds the nearest point
+  auto vertex = [&](const btVector3 &v) {
+    s[0] = v;
+    n = 1;
+    return v;
+  };
+  auto edge = [&](const btVector3 &u, const btVector3 &v, const btVector3 &at) {
+    s[0] = u;
+    s[1] = v;
+    n = 2;
+    return at;
+  };
   btVector3 ab = b - a, ac = c - a, ap = -a;
   double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) {
-    s[0] = a;
-    n = 1;
-    return a;
-  }
+  if (d1 <= 0 && d2 <= 0) return vertex(a);
   btVector3 bp = -b;
   double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) {
-    s[0] = b;
-    n = 1;
-    return b;
-  }
+  if (d3 >= 0 && d4 <= d3) return vertex(b);
   double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    double v = d1 / (d1 - d3);
-    s[0] = a;
-    s[1] = b;
-    n = 2;
-    return a + ab * v;
-  }
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return edge(a, b, a + ab * (d1 / (d1 - d3)));
   btVector3 cp = -c;
   double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) {
-    s[0] = c;
-    n = 1;
-    return c;
-  }
+  if (d6 >= 0 && d5 <= d6) return vertex(c);
   double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    double w = d2 / (d2 - d6);
-    s[0] = a;
-    s[1] = c;
-    n = 2;
-    return a + ac * w;
-  }
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return edge(a, c, a + ac * (d2 / (d2 - d6)));
   double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    s[0] = b;
-    s[1] = c;
-    n = 2;
-    return b + (c - b) * w;
-  }
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return edge(b, c, b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
   double den = va + vb + vc;
   if (!(den > 0)) {  // degenerate: the nearest of its edges
     btVector3 e[3][2] = {{a, b}, {a, c}, {b, c}};
