@@ -11,11 +11,20 @@
   :description "The threads plan tasks run in: reuse, bindings, late evaporation requests.")
 (in-suite cpl-task-threads)
 
+(defun make-barrier (n)
+  "A function that returns once N calls of it have begun (or after 5 s): branches of a PAR that
+call it all run at the same time, each in a thread of its own, however fast each one is."
+  (let ((arrived (list 0)))
+    (lambda ()
+      (sb-ext:atomic-incf (car arrived))
+      (loop repeat 5000 while (< (car arrived) n) do (sleep 0.001)))))
+
 (defun par-threads ()
   "The threads the two branches of a PAR ran in."
-  (let ((a nil) (b nil))
+  (let ((a nil) (b nil) (meet (make-barrier 2)))
     (cpl:top-level
-      (cpl:par (setf a sb-thread:*current-thread*) (setf b sb-thread:*current-thread*)))
+      (cpl:par (progn (funcall meet) (setf a sb-thread:*current-thread*))
+               (progn (funcall meet) (setf b sb-thread:*current-thread*))))
     (list a b)))
 
 (defmacro with-idle-limit ((n) &body body)
@@ -52,7 +61,9 @@ threads stopped before and after."
 
 (test idle-threads-stay-bounded
   (with-idle-limit (3)
-    (cpl:top-level (cpl:par 1 2 3 4 5 6))
+    (let ((meet (make-barrier 6)))
+      (cpl:top-level (cpl:par (funcall meet) (funcall meet) (funcall meet)
+                              (funcall meet) (funcall meet) (funcall meet))))
     (is (= 3 (length (idle-threads))))))
 
 (defvar *inherited* :global "A special the tests' plans inherit.")
@@ -60,11 +71,16 @@ threads stopped before and after."
 
 (test a-task-sees-its-own-bindings-not-those-of-the-task-before
   (with-idle-limit (8)
-    (let ((seen '()))
+    ;; the two branches push at the same time: atomically, into the car of a cons
+    (let ((seen (list '())) (meet (make-barrier 2)) (meet-again (make-barrier 2)))
       (let ((*inherited* :first))
-        (cpl:top-level (cpl:par (push *inherited* seen) (push *inherited* seen))))
-      (cpl:top-level (cpl:par (push *inherited* seen) (push *inherited* seen)))
-      (is (equal '(:global :global :first :first) seen))
+        (cpl:top-level (cpl:par (progn (funcall meet) (sb-ext:atomic-push *inherited* (car seen)))
+                                (progn (funcall meet) (sb-ext:atomic-push *inherited* (car seen))))))
+      (cpl:top-level (cpl:par (progn (funcall meet-again)
+                                     (sb-ext:atomic-push *inherited* (car seen)))
+                              (progn (funcall meet-again)
+                                     (sb-ext:atomic-push *inherited* (car seen)))))
+      (is (equal '(:global :global :first :first) (car seen)))
       ;; a task thread waiting for work holds no binding of a task (NIL: none of its own)
       (is (= 2 (length (idle-threads))))
       (is (every (lambda (th)

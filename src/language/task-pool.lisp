@@ -31,13 +31,18 @@ ends, as a fresh thread per task).")
     (shiftf (task-thread-slot-job slot) nil)))
 
 (defun offer-task-thread (slot)
-  "Name this thread idle and, while there is room, put SLOT among the idle task threads (a job
+  "While there is room, name this thread idle and put SLOT among the idle task threads (a job
 handed to it now waits in SLOT until this thread has come back for it). True when it was put."
-  (setf (sb-thread:thread-name sb-thread:*current-thread*) *idle-task-thread-name*)
   (sb-thread:with-mutex (*idle-task-threads-lock*)
     (when (< (length *idle-task-threads*) *max-idle-task-threads*)
+      ;; named inside the lock: a thread that exits instead never carries the idle name, and
+      ;; no job can be handed to SLOT (renaming it) before it is named
+      (setf (sb-thread:thread-name sb-thread:*current-thread*) *idle-task-thread-name*)
       (push slot *idle-task-threads*)
-      t)))
+      (return-from offer-task-thread t)))
+  ;; no room: this thread exits, under a name that is neither a task's nor an idle thread's
+  (setf (sb-thread:thread-name sb-thread:*current-thread*) "plan thread (exiting)")
+  nil)
 
 (defun task-thread-loop (slot first-job)
   "The body of a task thread: run FIRST-JOB, then, while it offers this thread for the next
