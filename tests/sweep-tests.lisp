@@ -284,6 +284,76 @@ pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
       (is (find 'stick sweeps :key #'urdf-proj:sweep-moving))
       (is (every (lambda (s) (or (urdf-proj:sweep-moving-link s) (eq 'stick (urdf-proj:sweep-moving s)))) sweeps)))))
 
+(defun moved-frame-path (sweep before after)
+  "SWEEP's path as the robot itself gives it: set to the 17 states of the motion from BEFORE to
+AFTER one after the other (the base on a straight line, turned by slerp, the joints linearly),
+the moving link's or carried object's position read at each, the robot put back where it was."
+  (let* ((robot (robot))
+         (w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot))
+         (now (urdf-proj::robot-state-vectors robot))
+         (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
+         (n (length (cdr before)))
+         (indices (let ((v (make-array n :element-type '(signed-byte 32)))) (dotimes (i n v) (setf (aref v i) i))))
+         (q (make-array n :element-type 'double-float)))
+    (unwind-protect
+         (loop for k from 0 to 16
+               for f = (/ k 16d0)
+               collect (progn
+                         (dotimes (i n) (setf (aref q i) (+ (aref (cdr before) i) (* f (- (aref (cdr after) i) (aref (cdr before) i))))))
+                         (cram-native:set-object-pose
+                          w h (btr::pose->vector
+                               (cl-transforms:make-pose
+                                (cl-transforms:v+ (cl-transforms:origin b0)
+                                                  (cl-transforms:v* (cl-transforms:v- (cl-transforms:origin b1) (cl-transforms:origin b0)) f))
+                                (cl-transforms:slerp (cl-transforms:orientation b0) (cl-transforms:orientation b1) f))))
+                         (cram-native:set-robot-joints w h indices q)
+                         (let ((p (cl-transforms:origin
+                                   (if (urdf-proj:sweep-moving-link sweep)
+                                       (btr:link-pose robot (urdf-proj:sweep-moving-link sweep))
+                                       (btr:pose (btr:object (btr:world robot) (urdf-proj:sweep-moving sweep)))))))
+                           (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p)))))
+      (urdf-proj::restore-robot-state robot now))))
+
+(defun same-path-p (a b)
+  (and (= (length a) (length b) 17)
+       (every (lambda (p q) (every (lambda (x y) (< (abs (- x y)) 1d-9)) p q)) a b)))
+
+(test sweep-paths-are-the-motions
+  ;; a sweep's path, computed natively without moving the robot, holds the points that moving
+  ;; the robot through the motion gives: links and carried objects, an arm motion and a base turn
+  (with-open-world ()
+    (set-right-arm (mix *right-park* *right-out* 0.5))
+    (let ((palm (btr:link-pose (robot) "r_gripper_tool_frame")))
+      (add-box 'board (cl-transforms:v+ (cl-transforms:origin palm) (cl-transforms:make-3d-vector 0 0 -0.2))
+               '(0.3 0.3 0.02)))
+    (set-right-arm *right-park*)
+    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
+      (btr:add-object btr:*current-bullet-world* :box 'stick
+                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
+                      :size '(0.02 0.02 0.3) :mass 0.1)
+      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (let* ((park (urdf-proj::robot-state-vectors (robot)))
+           (out (progn (set-right-arm *right-out*) (urdf-proj::robot-state-vectors (robot))))
+           ;; a post on the circle of the stretched-out hand, 1.2 rad on from it
+           (post (let* ((hand (point-on-link "r_gripper_palm_link" 0.1))
+                        (r (sqrt (+ (expt (cl-transforms:x hand) 2) (expt (cl-transforms:y hand) 2))))
+                        (a (+ (atan (cl-transforms:y hand) (cl-transforms:x hand)) 1.2)))
+                   (add-box 'post (cl-transforms:make-3d-vector (* r (cos a)) (* r (sin a)) 0.5) '(0.08 0.08 1.0))))
+           (arm (urdf-proj:robot-sweeps park "moving-arm-joints" :arm))
+           ;; the base turning by 2.5 rad with the arm out, through the post
+           (turned (urdf-proj::base-state out 0d0 0d0 2.5d0))
+           (turn (urdf-proj:robot-sweeps out "going" :base :after turned)))
+      (is (find 'stick arm :key #'urdf-proj:sweep-moving))
+      (is (find-if #'urdf-proj:sweep-moving-link arm))
+      (is (not (null post)))
+      (is (find 'post turn :key #'urdf-proj:sweep-hit))
+      (dolist (s arm)
+        (is (same-path-p (moved-frame-path s park out) (urdf-proj:sweep-path s))))
+      (dolist (s turn)
+        (is (same-path-p (moved-frame-path s out turned) (urdf-proj:sweep-path s))))
+      ;; the robot was not moved
+      (is (urdf-proj::same-state-p out (urdf-proj::robot-state-vectors (robot)))))))
+
 (test base-turn-with-an-outstretched-arm-only-warns
   (with-open-world ()
     (set-right-arm *right-out*)
@@ -451,3 +521,30 @@ pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
                       (push record off)))))))))
       (is (< 100 records) "~d records" records)
       (is (null off) "~d of ~d contact points off the body hit, e.g. ~s" (length off) records (subseq off 0 (min 6 (length off)))))))
+
+(test fast-search-equals-reference-in-the-kitchen
+  ;; seeded right-arm moves of the PR2 at the kitchen table, with base turns: the sweep check's
+  ;; search gives the same records, to the bit, as its plain reference search (:reference t)
+  (with-open-world (:kitchen t)
+    (let* ((state (sb-ext:seed-random-state 41))
+           (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (floor (btr:object-handle (btr:object btr:*current-bullet-world* :floor)))
+           (records 0) (differ '()))
+      (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.8547d0 -0.381d0 0)
+                                                        (cl-transforms:axis-angle->quaternion
+                                                         (cl-transforms:make-3d-vector 0 0 1) (/ pi -2))))
+      (let ((base (cram-native:object-pose w r)))
+        (dotimes (k 60)
+          (let ((qa (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+                (qb (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+                (turned (let ((v (copy-seq base)) (yaw (- (* 0.1d0 k) 3d0)))
+                          (setf (aref v 3) 0d0 (aref v 4) 0d0 (aref v 5) (sin (/ yaw 2)) (aref v 6) (cos (/ yaw 2)))
+                          v)))
+            (dolist (ends (list (list base qa base qb) (list base qa turned qa) (list base qa turned qb)))
+              (let* ((keys (list :ignore (list (list -1 -1 floor -1)) :skip-start-contacts (oddp k)))
+                     (fast (apply #'cram-native:robot-sweep-check w r (append ends keys)))
+                     (plain (apply #'cram-native:robot-sweep-check w r (append ends keys (list :reference t)))))
+                (incf records (length fast))
+                (unless (equalp fast plain) (push (list fast plain) differ)))))))
+      (is (< 100 records) "~d records" records)
+      (is (null differ) "~d of 180 sweeps differ from the reference search, e.g. ~s" (length differ) (first differ)))))

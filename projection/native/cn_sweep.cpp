@@ -301,6 +301,8 @@ void Sweep::run(double max_step) {
   n = 1 << levels;
   gather_candidates(lp0, lp1);
   point_slot.assign(n + 1, -1);
+  time_poses.clear();
+  time_index.clear();
   size_t expect = (size_t)std::min(n + 1, 2 * levels + 8) * movers.size();
   slot_pose.reserve(expect);
   slot_lo.reserve(expect);
@@ -311,7 +313,10 @@ void Sweep::run(double max_step) {
     std::vector<int> &all = pool[0];
     all.clear();
     for (int c = movers[i].c0; c < movers[i].c0 + movers[i].nc; ++c) all.push_back(c);
-    descend(i, 0, n, 0);
+    if (reference)
+      descend_reference(i, 0, n, 0);
+    else
+      descend(i, 0, n, 0);
   }
 }
 
@@ -343,7 +348,9 @@ void check_common(World &w, const int *ignore4, int n_ignore, double max_step, d
   check_ignore(w, ignore4, n_ignore);
   check_positive(max_step, "maximum step");
   check_positive(tol, "tolerance");
-  if (flags & ~CN_SWEEP_SKIP_START_CONTACTS) fail(CN_E_ARG, "sweep flags %d, expected 0 or %d", flags, CN_SWEEP_SKIP_START_CONTACTS);
+  if (flags & ~(CN_SWEEP_SKIP_START_CONTACTS | CN_SWEEP_REFERENCE))
+    fail(CN_E_ARG, "sweep flags %d, expected a sum of %d and %d", flags, CN_SWEEP_SKIP_START_CONTACTS,
+         CN_SWEEP_REFERENCE);
   check_output(cap, o4, "contact output");
   check_output(cap, od, "fraction and point output");
 }

@@ -5,6 +5,7 @@
 
 #include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
 #include <algorithm>
+#include <cstring>
 
 namespace cn {
 namespace sweep {
@@ -141,6 +142,62 @@ struct Cand {
   }
 };
 
+// A table from times (doubles, compared by their bits) to entries, emptied in O(1) per sweep.
+struct TimeIndex {
+  std::vector<uint64_t> key;
+  std::vector<uint32_t> gen;  // the key is set when its gen is the table's
+  std::vector<size_t> val;
+  uint32_t cur = 1;
+  size_t used = 0;
+  void clear() {
+    if (++cur == 0) {  // wrapped: forget every entry for real
+      std::fill(gen.begin(), gen.end(), 0);
+      cur = 1;
+    }
+    used = 0;
+  }
+  static size_t hash(uint64_t k) { return (size_t)((k ^ (k >> 29)) * 0x9E3779B97F4A7C15ull >> 20); }
+  // The entry of T, or SIZE_MAX when it has none.
+  size_t find(double t) const {
+    if (key.empty()) return SIZE_MAX;
+    uint64_t k;
+    std::memcpy(&k, &t, 8);
+    for (size_t i = hash(k) & (key.size() - 1);; i = (i + 1) & (key.size() - 1)) {
+      if (gen[i] != cur) return SIZE_MAX;
+      if (key[i] == k) return val[i];
+    }
+  }
+  void insert(double t, size_t v) {
+    if (2 * (used + 1) > key.size()) grow();
+    uint64_t k;
+    std::memcpy(&k, &t, 8);
+    size_t i = hash(k) & (key.size() - 1);
+    while (gen[i] == cur) i = (i + 1) & (key.size() - 1);
+    key[i] = k;
+    gen[i] = cur;
+    val[i] = v;
+    ++used;
+  }
+  void grow() {
+    std::vector<uint64_t> k2 = std::move(key);
+    std::vector<uint32_t> g2 = std::move(gen);
+    std::vector<size_t> v2 = std::move(val);
+    size_t n = std::max<size_t>(64, 2 * k2.size());
+    key.assign(n, 0);
+    gen.assign(n, 0);
+    val.assign(n, 0);
+    uint32_t old = cur;
+    cur = 1;
+    used = 0;
+    for (size_t i = 0; i < k2.size(); ++i)
+      if (g2[i] == old) {
+        double t;
+        std::memcpy(&t, &k2[i], 8);
+        insert(t, v2[i]);
+      }
+  }
+};
+
 // The working arrays of the sweeps of one thread, kept from one call to the next so that a
 // check does not allocate them afresh (each use sets the size it needs and every entry it reads).
 struct Scratch {
@@ -154,7 +211,9 @@ struct Scratch {
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
   std::vector<int> anchors;               // the movers' distinct anchors
-  std::vector<btTransform> slot_anchor;   // per slot: the base, then the anchors' poses
+  std::vector<btTransform> time_poses;    // per time: the base, then the anchors' poses
+  TimeIndex time_index;
+  std::vector<size_t> slot_at;            // per slot: its entry in time_poses
   std::vector<char> slot_have;            // per slot and mover: pose and box computed
   std::vector<std::vector<int>> pool;
 };

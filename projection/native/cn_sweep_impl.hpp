@@ -46,7 +46,8 @@ struct Sweep {
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
-        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {}
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0),
+        reference((flags & CN_SWEEP_REFERENCE) != 0) {}
 
   void set_ends(const btTransform &a, const btTransform &b);
 
@@ -57,13 +58,26 @@ struct Sweep {
     return btTransform(r, base0.getOrigin().lerp(base1.getOrigin(), t));
   }
 
-  // The frame of mover M at time T; the links the movers hang from (their anchors, see run)
-  // computed into lp, unless FK_DONE says they are for T already.
-  btTransform pose_at(const Mover &m, double t, bool fk_done = false) {
-    btTransform base = base_at(t);
-    if (m.anchor < 0) return base * m.rel_anchor;
-    if (!fk_done) fk(t, base);
-    return lp[m.anchor] * m.rel_anchor;
+  // The frame of mover M at time T, from the base and the links the movers hang from (their
+  // anchors, see run) there, computed once per time (at_time).
+  btTransform pose_at(const Mover &m, double t) {
+    return time_poses[at_time(t) + m.anchor_ix] * m.rel_anchor;
+  }
+
+  // The entry in time_poses of the base's and the anchors' poses at time T (computed when first
+  // asked for).
+  size_t at_time(double t) {
+    size_t found = time_index.find(t);
+    if (found != SIZE_MAX) return found;
+    size_t at = time_poses.size(), na = anchors.size() + 1;
+    time_index.insert(t, at);
+    time_poses.resize(at + na);
+    time_poses[at] = base_at(t);
+    if (robot && any_anchor) {
+      fk(t, time_poses[at]);
+      for (size_t a = 1; a < na; ++a) time_poses[at + a] = lp[anchors[a - 1]];
+    }
+    return at;
   }
 
   void fk(double t, const btTransform &base) {
@@ -125,6 +139,16 @@ struct Sweep {
 
   void report(const Mover &m, const btCollisionObject *other, double t, const btVector3 &point);
 
+  // the reference search (cn_sweep_reference.cpp, flag CN_SWEEP_REFERENCE)
+  bool reference = false;
+  double distance_reference(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                            btVector3 *point = nullptr);
+  double confirm_reference(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
+                           double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
+                           int depth);
+  void slot_reference(int k);
+  void descend_reference(size_t i, int ka, int kb, int depth);
+
   Cand *kept = nullptr;  // the pair confirm searches in a sub-step, which keeps the distance
   int kept_k = 0;        // at its end (sub-step point kept_k) for the next sub-step
 
@@ -157,7 +181,9 @@ struct Sweep {
   std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
 
   std::vector<int> &anchors = sc.anchors;                // distinct anchors (Mover::anchor_ix - 1)
-  std::vector<btTransform> &slot_anchor = sc.slot_anchor;  // per slot, 1 + anchors.size() poses
+  std::vector<btTransform> &time_poses = sc.time_poses;  // per time asked, 1 + anchors.size() poses
+  TimeIndex &time_index = sc.time_index;                 // time -> its poses
+  std::vector<size_t> &slot_at = sc.slot_at;             // per slot: its entry in time_poses
   std::vector<char> &slot_have = sc.slot_have;           // per slot and mover
 
   int slot(int k);
@@ -169,7 +195,7 @@ struct Sweep {
     if (!slot_have[at]) {
       const Mover &m = movers[i];
       size_t sl = at / movers.size();
-      slot_pose[at] = slot_anchor[sl * (anchors.size() + 1) + m.anchor_ix] * m.rel_anchor;
+      slot_pose[at] = time_poses[slot_at[sl] + m.anchor_ix] * m.rel_anchor;
       m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
       slot_have[at] = 1;
     }

@@ -216,7 +216,7 @@ double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta,
 // poses and boxes follow when asked for (slot_entry).
 int Sweep::slot(int k) {
   if (point_slot[k] >= 0) return point_slot[k];
-  size_t nm = movers.size(), na = anchors.size() + 1;
+  size_t nm = movers.size();
   int sl = n_slots++;
   point_slot[k] = sl;
   slot_pose.resize((sl + 1) * nm);
@@ -224,14 +224,8 @@ int Sweep::slot(int k) {
   slot_hi.resize((sl + 1) * nm);
   slot_have.resize((sl + 1) * nm);
   std::fill(slot_have.begin() + sl * nm, slot_have.end(), 0);
-  slot_anchor.resize((sl + 1) * na);
-  double t = (double)k / n;
-  btTransform *poses = &slot_anchor[sl * na];
-  poses[0] = base_at(t);
-  if (robot && any_anchor) {
-    fk(t, poses[0]);
-    for (size_t a = 1; a < na; ++a) poses[a] = lp[anchors[a - 1]];
-  }
+  slot_at.resize(sl + 1);
+  slot_at[sl] = at_time((double)k / n);
   return sl;
 }
 

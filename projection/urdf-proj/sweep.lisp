@@ -34,7 +34,10 @@ it hits, and where on the way."
   (hit-link nil)
   (fraction 0d0 :type double-float)
   (point nil)
-  (path nil))
+  (%path :unset)
+  ;; its path as (points offset): 17 x y z from OFFSET of the DVEC POINTS, made into SWEEP-PATH's
+  ;; list when first asked for
+  (path-source nil))
 
 (setf (documentation 'sweep-motion 'function) "The label of the motion (\"moving-arm-joints\" ...)."
       (documentation 'sweep-kind 'function) "The kind of motion: :ARM, :TCP, :TORSO, :GRIPPER or :BASE."
@@ -44,7 +47,7 @@ it hits, and where on the way."
       (documentation 'sweep-hit-link 'function) "The link hit (a string) of an articulated object, or NIL."
       (documentation 'sweep-fraction 'function) "Where on the way the first contact is, 0 (start) .. 1 (end)."
       (documentation 'sweep-point 'function) "The map point (x y z) of the first contact."
-      (documentation 'sweep-path 'function) "Map points (x y z) of the moving link or object's frame along the motion, 0 .. 1 in 16 steps.")
+)
 
 (defun sweep-description (sweep)
   "A short text naming SWEEP's moving link or object, what it hits and where on the way."
@@ -160,37 +163,36 @@ touching items, and its carried objects touching anything."
                   :hit-link (and hit (btr::link-name-of hit hl))
                   :fraction fraction :point (coerce point 'list)))))
 
-(defun moving-frame-point (robot sweep)
-  (let ((world (btr:world robot)))
-    (if (sweep-moving-link sweep)
-        (cl-transforms:origin (btr:link-pose robot (sweep-moving-link sweep)))
-        (cl-transforms:origin (btr:pose (btr:object world (sweep-moving sweep)))))))
+(defun sweep-path (sweep)
+  "Map points (x y z) of SWEEP's moving link or object's frame along the motion, 0 .. 1 in 16
+steps."
+  (when (eq (sweep-%path sweep) :unset)
+    (setf (sweep-%path sweep)
+          (destructuring-bind (&optional points offset) (sweep-path-source sweep)
+            (and points
+                 (loop for k from 0 to 16
+                       for i = (+ offset (* 3 k))
+                       collect (list (aref points i) (aref points (+ i 1)) (aref points (+ i 2))))))))
+  (sweep-%path sweep))
 
-(defun fill-sweep-paths (robot before after sweeps)
-  "Set the path of each of SWEEPS: its moving frame at 16 steps from BEFORE to AFTER (robot
-states); ROBOT is left where it is."
-  (let* ((now (robot-state-vectors robot))
-         (w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot))
-         (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
-         (n (length (cdr before)))
-         (indices (let ((v (make-array n :element-type '(signed-byte 32)))) (dotimes (i n v) (setf (aref v i) i))))
-         (q (make-array n :element-type 'double-float)))
-    (dolist (s sweeps) (setf (sweep-path s) '()))
-    (unwind-protect
-         (loop for k from 0 to 16
-               for f = (/ k 16d0)
-               do (dotimes (i n) (setf (aref q i) (+ (aref (cdr before) i) (* f (- (aref (cdr after) i) (aref (cdr before) i))))))
-                  (cram-native:set-object-pose w h (btr::pose->vector
-                                               (cl-transforms:make-pose
-                                                (cl-transforms:v+ (cl-transforms:origin b0)
-                                                                  (cl-transforms:v* (cl-transforms:v- (cl-transforms:origin b1) (cl-transforms:origin b0)) f))
-                                                (cl-transforms:slerp (cl-transforms:orientation b0) (cl-transforms:orientation b1) f))))
-                  (cram-native:set-robot-joints w h indices q)
-                  (dolist (s sweeps)
-                    (let ((p (moving-frame-point robot s)))
-                      (push (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p)) (sweep-path s)))))
-      (restore-robot-state robot now))
-    (dolist (s sweeps) (setf (sweep-path s) (nreverse (sweep-path s))))
+(defun (setf sweep-path) (path sweep)
+  "Set SWEEP's path (see SWEEP-PATH)."
+  (setf (sweep-%path sweep) path))
+
+(defun note-sweep-paths (robot before after sweeps)
+  "Give each of SWEEPS its path (SWEEP-PATH): where its moving frame is along ROBOT's motion
+from BEFORE to AFTER (robot states) as the sweep check moves it, the robot left where it is.
+Returns SWEEPS."
+  (let* ((world (btr:world robot)) (rh (btr:object-handle robot))
+         (points (cram-native:robot-sweep-paths
+                  (btr:world-handle world) rh (car before) (cdr before) (car after) (cdr after)
+                  (mapcar (lambda (s)
+                            (if (sweep-moving-link s)
+                                (list rh (btr:link-index robot (sweep-moving-link s)))
+                                (list (btr:object-handle (btr:object world (sweep-moving s))) -1)))
+                          sweeps))))
+    (loop for s in sweeps for i from 0
+          do (setf (sweep-path-source s) (list points (* i 3 17))))
     sweeps))
 
 (defun robot-sweeps (before label kind &key (robot (robot-object)) ignore-links ignore-attached
@@ -218,7 +220,7 @@ and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not
               (setf records (remove-if (lambda (r) (member (subseq r 0 4) arrivals :test #'equal))
                                        records))))
           (when records
-            (fill-sweep-paths robot before after
+            (note-sweep-paths robot before after
                               (mapcar (lambda (r) (sweep-from-record world robot label kind r))
                                       records)))))))
 
