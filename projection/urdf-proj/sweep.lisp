@@ -118,23 +118,46 @@ is meant to make (INTENDED-CONTACTS: *SWEEP-ALLOWED-CONTACTS*, the grasped and p
                            (t (projection-error "*SWEEP-ALLOWED-CONTACTS* entry ~s: hit ~s, expected an ~
                                                  object name, (object-name link-name) or T." entry hit))))))))
 
-(defun arrival-contact-records (world robot)
+(defun contacts-with (world handle others)
+  "The contacts (object link other other-link) of the object HANDLE with the objects OTHERS
+(handles) of WORLD: those of CRAM-NATIVE:OBJECT-CONTACTS, asked of these objects only."
+  (let ((w (btr:world-handle world)))
+    (and others
+         (loop for (a la b lb) in (cram-native:object-contacts
+                                   w handle :except (loop for o in (btr:objects world)
+                                                          for h = (btr:object-handle o)
+                                                          unless (or (= h handle) (member h others)) collect h))
+               collect (list a la b lb)))))
+
+(defun arrival-contact-records (world robot &optional (records nil records-p))
   "Contacts the motion arrives at on purpose, as ignore records: the robot's hand links
-touching items, and its carried objects touching anything."
+touching items, and its carried objects touching anything. With RECORDS (sweep records), only
+those that could be among them are looked for: the same answer for each of RECORDS."
   (let ((hands (all-hand-links robot))
         (rh (btr:object-handle robot))
-        (records '()))
-    (loop for (a la b lb) in (cram-native:object-contacts (btr:world-handle world) rh)
-          for other = (btr::object-by-handle world b)
-          when (and (= a rh) (>= la 0) (typep other 'btr:item)
-                    (member (btr::link-name-of robot la) hands :test #'string=))
-            do (push (list a la b lb) records))
-    (dolist (entry (btr:attached-objects robot))
-      (let ((o (btr:object world (first entry))))
-        (when o
-          (loop for (a la b lb) in (cram-native:object-contacts (btr:world-handle world) (btr:object-handle o))
-                unless (= b rh) do (push (list a la b lb) records)))))
-    records))
+        (arrivals '()))
+    (flet ((hit-objects (a test)
+             ;; the objects RECORDS hit with A's links that pass TEST, or all objects but the robot
+             (if records-p
+                 (remove-duplicates (loop for (ra la rb) in records
+                                          when (and (= ra a) (funcall test la rb)) collect rb))
+                 (loop for o in (btr:objects world)
+                       for h = (btr:object-handle o)
+                       unless (= h a) collect h))))
+      (loop for (a la b lb) in (contacts-with world rh
+                                              (hit-objects rh (lambda (la b)
+                                                                (and (>= la 0) (typep (btr::object-by-handle world b) 'btr:item)))))
+            for other = (btr::object-by-handle world b)
+            when (and (= a rh) (>= la 0) (typep other 'btr:item)
+                      (member (btr::link-name-of robot la) hands :test #'string=))
+              do (push (list a la b lb) arrivals))
+      (dolist (entry (btr:attached-objects robot))
+        (let ((o (btr:object world (first entry))))
+          (when o
+            (let ((oh (btr:object-handle o)))
+              (loop for (a la b lb) in (contacts-with world oh (remove rh (hit-objects oh (constantly t))))
+                    unless (= b rh) do (push (list a la b lb) arrivals)))))))
+    arrivals))
 
 (defun ignore-link-records (robot links)
   (let ((rh (btr:object-handle robot)))
@@ -216,7 +239,7 @@ and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not
           ;; pairs are independent: the contacts arrived at on purpose (where the robot now is,
           ;; the end of the motion) are taken out afterwards
           (when (and records (same-state-p after (robot-state-vectors robot)))
-            (let ((arrivals (arrival-contact-records world robot)))
+            (let ((arrivals (arrival-contact-records world robot records)))
               (setf records (remove-if (lambda (r) (member (subseq r 0 4) arrivals :test #'equal))
                                        records))))
           (when records
