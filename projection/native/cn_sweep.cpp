@@ -25,7 +25,7 @@ void collect_pieces(const btCollisionShape *s, const btTransform &local, std::ve
     for (int i = 0; i < c->getNumChildShapes(); ++i)
       collect_pieces(c->getChildShape(i), local * c->getChildTransform(i), out, owned);
   } else if (s->isConvex()) {
-    out.push_back({static_cast<const btConvexShape *>(s), local});
+    out.push_back({static_cast<const btConvexShape *>(s), local, local == btTransform::getIdentity()});
   } else {
     btVector3 lo, hi;
     s->getAabb(btTransform::getIdentity(), lo, hi);
@@ -34,7 +34,7 @@ void collect_pieces(const btCollisionShape *s, const btTransform &local, std::ve
     auto box = std::make_unique<btBoxShape>(half);
     box->setMargin(0);
     btTransform at(btQuaternion::getIdentity(), (hi + lo) * 0.5);
-    out.push_back({box.get(), local * at});
+    out.push_back({box.get(), local * at, false});
     owned.push_back(std::move(box));
   }
 }
@@ -242,6 +242,23 @@ void Sweep::set_anchors(const std::vector<btTransform> &lp0) {
   }
 }
 
+// The joints whose child links fk computes: all those needed, and those a changing joint moves.
+void Sweep::plan_fk() {
+  const Model &md = *robot->model;
+  std::vector<char> &moved = sc.moved;
+  moved.assign(md.links.size(), 0);
+  fk_joints.clear();
+  fk_moving.clear();
+  fk_primed = false;
+  for (size_t j = 0; j < md.joints.size(); ++j) {  // parents before children
+    const JointM &jm = md.joints[j];
+    moved[jm.child] = moved[jm.parent] || dv[j] != 0;
+    if (!needed[jm.child]) continue;
+    fk_joints.push_back((int)j);
+    if (moved[jm.child]) fk_moving.push_back((int)j);
+  }
+}
+
 // The joint changes, once the ends are set.
 void Sweep::prepare() {
   base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
@@ -291,6 +308,7 @@ void Sweep::run(double max_step) {
     mark_needed([](const Mover &m) { return m.anchor; });
     qt = q0;
     lp = lp0;
+    plan_fk();
   }
   double n_real = std::ceil(std::max(total_rot, total_trans) / max_step);
   if (n_real > 1e5)

@@ -70,6 +70,9 @@ struct Closest : btCollisionWorld::ContactResultCallback {
 struct Piece {                    // one convex piece of a moving body, in the body frame
   const btConvexShape *shape;
   btTransform local;
+  bool at_origin;                 // local is the identity
+  // the piece's pose for the body's pose T (T itself when at_origin: the product would be T)
+  btTransform placed(const btTransform &t) const { return at_origin ? t : t * local; }
 };
 
 struct Span {                     // a run of pieces held elsewhere
@@ -210,6 +213,8 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<int> fk_joints, fk_moving;  // see Sweep::fk
+  std::vector<char> moved;
   std::vector<int> anchors;               // the movers' distinct anchors
   std::vector<btTransform> time_poses;    // per time: the base, then the anchors' poses
   TimeIndex time_index;

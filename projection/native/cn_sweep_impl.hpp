@@ -80,10 +80,18 @@ struct Sweep {
     return at;
   }
 
+  // The poses of the links the movers hang from at time T (the base there BASE), into lp: the
+  // first time all of them, then those a changing joint moves (the others keep their poses
+  // while the base stays: the same base pose and joint values give the same poses).
   void fk(double t, const btTransform &base) {
     for (size_t j = 0; j < qt.size(); ++j) qt[j] = q0[j] + t * (q1[j] - q0[j]);
-    compute_link_poses(*robot->model, base, qt, lp, &needed);
+    compute_link_poses_of(*robot->model, base, qt, lp, fk_primed ? fk_moving : fk_joints);
+    fk_primed = !base_moves;
   }
+  std::vector<int> &fk_joints = sc.fk_joints;  // the joints of the links needed, model order
+  std::vector<int> &fk_moving = sc.fk_moving;  // those of them a changing joint moves
+  bool fk_primed = false;                       // lp holds every needed link's pose
+  void plan_fk();
 
   Mover &add_mover(int obj, int link, const btCollisionObject *co, int frame_link,
                    const btTransform &rel, const std::vector<int> *chain,

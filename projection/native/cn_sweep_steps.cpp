@@ -134,7 +134,7 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
                          const btCollisionObject *other) {
   const btBroadphaseProxy *h = other->getBroadphaseHandle();
   for (const Piece &p : m.pieces) {
-    hull.set(p.shape, ta * p.local, tb * p.local, grow);
+    hull.set(p.shape, p.placed(ta), p.placed(tb), grow);
     btVector3 lo, hi;
     hull.getAabb(btTransform::getIdentity(), lo, hi);
     if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
@@ -156,7 +156,7 @@ Closest Sweep::distance(const Mover &m, const btTransform &t, double maxd, const
 double Sweep::distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
   double d = maxd;
   for (const Piece &p : m.pieces) {
-    d = std::min(d, convex_distance(p.shape, t * p.local, other, d));
+    d = std::min(d, convex_distance(p.shape, p.placed(t), other, d));
     if (d <= 0) break;
   }
   return d;
@@ -252,9 +252,11 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
     if (x.meets(lo, hi)) keep.push_back(c);
   }
   if (keep.empty()) return;
-  if (kb - ka == 8) {
+  if (kb - ka == 8 || (ka > 0 && (kb - ka == 4 || kb - ka == 2))) {
     // one hull over eight sub-steps clears, in one test, a pair that passes close by
-    // (everything before ta is clear already: the pair is clear up to tb)
+    // (everything before ta is clear already: the pair is clear up to tb); so do hulls over
+    // four and two, where the hull over eight did not, but not at the start of the move, where
+    // the pairs met are those the start's contacts are looked for among
     keep.erase(std::remove_if(keep.begin(), keep.end(),
                               [&](int c) {
                                 if (ta < cand[c].clear_until ||
