@@ -150,6 +150,12 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
     btVector3 p0 = o0, p1 = o1;
     int k0 = first_changing(*m.chain);
     m.bounded = false;
+    struct Rate {
+      bool prismatic;
+      double d, reach;
+    };
+    std::array<Rate, 64> rates;  // the chain's joints from the mover back to the base
+    size_t nr = 0;
     for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
       int j = (*m.chain)[k];
       int child = robot->model->joints[j].child;
@@ -164,15 +170,37 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
         m.bound_hi = c0 + btVector3(r, r, r);
       }
       double d = std::fabs(dv[j]);
-      if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
+      bool prismatic = robot->model->joints[j].type == CN_JOINT_PRISMATIC;
+      if (prismatic) {
         B += d;
       } else {
         W += d;
         B += d * reach;
       }
+      if (nr < rates.size()) rates[nr++] = {prismatic, d, reach};
     }
     reach += std::max((p0 - base0.getOrigin()).length(), (p1 - base1.getOrigin()).length());
     B += angle * reach;
+    // a bound on the acceleration of the mover's points, the joints' and the base's rates being
+    // constant: a revolute joint's term is its rate times how fast its axis turns and its
+    // points move relative to its origin (2 x the rotation above it x reach, and the speeds
+    // below it), a prismatic joint's its rate times how fast its axis turns, the base
+    // rotation's (about a fixed axis through the base origin) its rate times the speed
+    double A = 0, S = 0, below = 0;  // S: speed bound of the joints from the mover up to here
+    for (size_t r = 0; r < nr; ++r) {
+      const Rate &x = rates[r];
+      if (x.prismatic) {
+        S += x.d;
+        A += x.d * (W - below);
+      } else {
+        S += x.d * x.reach;
+        below += x.d;
+        A += x.d * (2 * (W - below) * x.reach + S);
+      }
+    }
+    S += angle * reach;
+    A += angle * S;
+    m.A = nr < rates.size() ? std::min(A, 3 * W * B) : 3 * W * B;
     if (turn_in_place) {  // the mover's origin circles the base's vertical axis at its height
       const btVector3 &b = base0.getOrigin();
       double rho = std::sqrt((o0.x() - b.x()) * (o0.x() - b.x()) + (o0.y() - b.y()) * (o0.y() - b.y()));

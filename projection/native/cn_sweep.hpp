@@ -105,6 +105,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
+  double A = 0;                   // a bound on its points' acceleration (<= 3 W B, see bound_movers)
   // a box the mover stays in during the whole move, when one is known that is tighter than
   // its path bound (see Sweep::bound_movers)
   bool bounded = false;
