@@ -68,7 +68,7 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
 namespace sweep {
 
 Scratch &scratch() {
-  static thread_local Scratch s;
+  static Scratch s;  // under the API lock
   return s;
 }
 
@@ -130,6 +130,21 @@ void Sweep::add_attached(int parent, int frame_link, const btTransform &rel, int
     if (chain_moves(chain)) add_body_mover(a.obj, c->rb, fl, r, std::move(chain));
     add_attached(a.obj, fl, r, depth + 1);
   }
+}
+
+// The largest distance from the line through the origin of a frame along the unit AXIS to a
+// point of mover M, whose frame is at REL in that frame (from its pieces' boxes in that frame).
+static double axis_reach(const Mover &m, const btTransform &rel, const btVector3 &axis) {
+  double r2 = 0;
+  for (const Piece &p : m.pieces) {
+    btVector3 lo, hi;
+    p.shape->getAabb(rel * p.local, lo, hi);
+    for (int k = 0; k < 8; ++k) {
+      btVector3 c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+      r2 = std::max(r2, (double)(c - axis * c.dot(axis)).length2());
+    }
+  }
+  return std::sqrt(r2) + 1e-9;
 }
 
 // W and B of every mover over the whole move (see the file comment), from the chain of its
@@ -201,6 +216,26 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
     S += angle * reach;
     A += angle * S;
     m.A = nr < rates.size() ? std::min(A, 3 * W * B) : 3 * W * B;
+    // a speed bound for clearing intervals, the grid of the search keeping B: the turn of the
+    // joint nearest the mover that changes, or of the base when none does, moves the mover's
+    // points at its rate times their distance from its axis (which that turn keeps), not
+    // their distance from its origin
+    double Bp = B;
+    btTransform mover0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
+    if (nr > 0 && nr < rates.size()) {
+      size_t r = 0;
+      while (r < nr && rates[r].d == 0) ++r;
+      if (r < nr && !rates[r].prismatic) {
+        const JointM &jm = robot->model->joints[(*m.chain)[m.chain->size() - 1 - r]];
+        const btTransform &c0 = lp0[jm.child];
+        Bp = B - rates[r].d * (rates[r].reach - axis_reach(m, c0.inverseTimes(mover0), jm.axis.normalized()));
+      } else if (r == nr && angle > 0) {
+        Bp = B - angle * (reach - axis_reach(m, base0.inverseTimes(mover0), (rot0.inverse() * rot1).getAxis()));
+      }
+    } else if (nr == 0 && angle > 0) {
+      Bp = B - angle * (reach - axis_reach(m, base0.inverseTimes(mover0), (rot0.inverse() * rot1).getAxis()));
+    }
+    m.Bp = Bp > 0 && Bp < B ? Bp : B;
     if (turn_in_place) {  // the mover's origin circles the base's vertical axis at its height
       const btVector3 &b = base0.getOrigin();
       double rho = std::sqrt((o0.x() - b.x()) * (o0.x() - b.x()) + (o0.y() - b.y()) * (o0.y() - b.y()));

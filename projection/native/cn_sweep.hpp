@@ -106,6 +106,7 @@ struct Mover {                    // a moving robot link, attached object or bod
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
   double A = 0;                   // a bound on its points' acceleration (<= 3 W B, see bound_movers)
+  double Bp = 0;                  // a bound on its points' speed (<= B, which makes the grid)
   // a box the mover stays in during the whole move, when one is known that is tighter than
   // its path bound (see Sweep::bound_movers)
   bool bounded = false;
@@ -202,9 +203,14 @@ struct TimeIndex {
   }
 };
 
-// The working arrays of the sweeps of one thread, kept from one call to the next so that a
-// check does not allocate them afresh (each use sets the size it needs and every entry it reads).
+// The working arrays of the sweeps, kept from one call to the next so that a check does not
+// allocate them afresh (each use sets the size it needs and every entry it reads). One for the
+// process: the library's entry points run one at a time (the API lock), from whatever thread.
 struct Scratch {
+  std::vector<double> q0, q1, qt, dv;
+  std::vector<Mover> movers;
+  std::vector<int> moving_ids;
+  std::vector<Hit> hits;
   std::vector<char> needed;
   std::vector<btTransform> lp, lp0, lp1, slot_pose;
   std::vector<const btCollisionObject *> found;
@@ -214,6 +220,7 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<std::array<int, 2>> mine_ignored;  // gather_candidates: one mover's ignore records
   std::vector<int> fk_joints, fk_moving;  // see Sweep::fk
   std::vector<char> moved;
   std::vector<int> anchors;               // the movers' distinct anchors

@@ -8,7 +8,7 @@
 namespace cn {
 namespace sweep {
 
-// The working arrays of the sweeps of this thread (cn_sweep.cpp).
+// The working arrays of the sweeps (cn_sweep.cpp).
 Scratch &scratch();
 
 struct Sweep {
@@ -18,10 +18,10 @@ struct Sweep {
   btTransform base0, base1;
   btQuaternion rot0, rot1;
   double angle = 0;                          // base rotation over the move
-  std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
+  std::vector<double> &q0 = sc.q0, &q1 = sc.q1, &qt = sc.qt, &dv = sc.dv;  // dv: joint value changes (mimic applied)
   std::vector<char> &needed = sc.needed;
   std::vector<btTransform> &lp = sc.lp;      // link poses at the time asked last
-  std::vector<Mover> movers;
+  std::vector<Mover> &movers = sc.movers;
   std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
   std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
   std::vector<std::unique_ptr<std::vector<int>>> body_chains;    // chains of attached bodies
@@ -30,7 +30,7 @@ struct Sweep {
   // which it cannot be reached
   std::vector<Cand> &cand = sc.cand;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
-  std::vector<int> moving_ids;                           // the robot and what it carries
+  std::vector<int> &moving_ids = sc.moving_ids;          // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
 
   bool moving(int id) const {
@@ -42,12 +42,17 @@ struct Sweep {
   bool skip_start = false;
   btCollisionObject probe;
   SweptHull hull;
-  std::vector<Hit> hits;
+  std::vector<Hit> &hits = sc.hits;
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
         skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0),
-        reference((flags & CN_SWEEP_REFERENCE) != 0) {}
+        reference((flags & CN_SWEEP_REFERENCE) != 0) {
+    for (auto *v : {&q0, &q1, &qt, &dv}) v->clear();
+    movers.clear();
+    moving_ids.clear();
+    hits.clear();
+  }
 
   void set_ends(const btTransform &a, const btTransform &b);
 
@@ -111,17 +116,6 @@ struct Sweep {
     for (int i = 0; i < n_ignore; ++i) {
       const int *r = ignore4 + 4 * i;
       if (r[0] == -1 && r[1] == -1 && (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
-        return true;
-    }
-    return false;
-  }
-
-  bool ignored(const Mover &m, int hobj, int hlink) const {
-    if (w.pair_ignored(m.obj, m.link, hobj, hlink)) return true;
-    for (int i = 0; i < n_ignore; ++i) {
-      const int *r = ignore4 + 4 * i;
-      if ((r[0] == -1 || r[0] == m.obj) && (r[1] == -1 || r[1] == m.link) &&
-          (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
         return true;
     }
     return false;

@@ -103,6 +103,14 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
     int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
     const double mlx = mlo[i].x(), mly = mlo[i].y(), mlz = mlo[i].z();
     const double mhx = mhi[i].x(), mhy = mhi[i].y(), mhz = mhi[i].z();
+    // the ignore records that may leave out pairs of this mover: their hit object and link
+    std::vector<std::array<int, 2>> &mine_ignored = sc.mine_ignored;
+    mine_ignored.clear();
+    for (int r = 0; r < n_ignore; ++r) {
+      const int *x = ignore4 + 4 * r;
+      if ((x[0] == -1 || x[0] == m.obj) && (x[1] == -1 || x[1] == m.link)) mine_ignored.push_back({x[2], x[3]});
+    }
+    bool world_ignores = !w.ignored.empty();
     int *out = meets.data();
     size_t k = 0;
     for (size_t f = 0; f < nf; ++f) {
@@ -114,7 +122,10 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
       size_t f = out[q];
       const std::array<int, 4> &id = found.id[f];
       if (!(id[2] & mask) || !(group & id[3])) continue;
-      if (ignored(m, id[0], id[1])) continue;
+      if (world_ignores && w.pair_ignored(m.obj, m.link, id[0], id[1])) continue;
+      bool left_out = false;
+      for (const auto &x : mine_ignored) left_out |= (x[0] == -1 || x[0] == id[0]) && (x[1] == -1 || x[1] == id[1]);
+      if (left_out) continue;
       cand.emplace_back();
       Cand &x = cand.back();
       for (int k = 0; k < 3; ++k) {
@@ -194,10 +205,10 @@ bool Sweep::touches(const Mover &m, const btTransform &t, double maxd, const btC
 double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
                       double &da, double tb, const btTransform &pb, double &db, int depth, btVector3 &point) {
   double h = tb - ta;
-  double path = h * m.B;
+  double path = h * m.B, reach = h * m.Bp;  // the grid's path bound; how far a point can move
   if (std::isnan(da)) da = distance_at(m, pa, path + tol, other);
   if (da <= 0 && touches(m, pa, path + tol, other, da, point)) return ta;
-  if (da > path) return -1;
+  if (da > reach) return -1;
   bool leaf = path <= tol || depth > 40;
   if (std::isnan(db)) {
     db = distance_at(m, pb, path + tol, other);
@@ -208,7 +219,7 @@ double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta,
     }
   }
   if (db > 0) {
-    if (leaf || da + db > path) return -1;
+    if (leaf || da + db > reach) return -1;
     if (!hull_touches(m, pa, pb, h * h * m.A / 8, other)) return -1;
   } else if (leaf) {
     return touches(m, pb, tol, other, db, point) ? tb : -1;
@@ -245,7 +256,7 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
   double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
   // the chord bound from the acceleration bound A, but at the start of the move from 3 W B (the
   // pairs met there are those the start's contacts are looked for among, as they always were)
-  double grow = h * h * (ka == 0 ? 3 * m.W * m.B : m.A) / 8, path = h * m.B;
+  double grow = h * h * (ka == 0 ? 3 * m.W * m.B : m.A) / 8, path = h * (ka == 0 ? m.B : m.Bp);
   btVector3 lo = slot_lo[a], hi = slot_hi[a];
   lo.setMin(slot_lo[b]);
   hi.setMax(slot_hi[b]);
@@ -305,7 +316,7 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
         report(m, other, ta, point);
         continue;
       }
-      x.clear_until = ta + d / m.B;
+      x.clear_until = ta + d / m.Bp;
       if (tb <= x.clear_until) continue;
       known = d;
     } else {
