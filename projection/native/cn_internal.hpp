@@ -228,6 +228,9 @@ struct Object {
   std::vector<btRigidBody *> link_rb;           // null for links without collision
   std::vector<std::array<float, 4>> link_rgba;  // override colour (a < 0: model colours)
   bool self_collision = false;
+  // the sweep checks' view of its links (cn_sweep.cpp), made for its link shapes: kept here
+  // once checked against them (null: not yet)
+  std::shared_ptr<const void> sweep_links;
 };
 
 struct Attachment {

@@ -85,12 +85,19 @@ struct Span {                     // a run of pieces held elsewhere
 struct LinkInfo {
   const btCollisionShape *shape = nullptr;  // the link body's shape it was made for
   std::vector<int> chain;                   // movable joints from the root to the link
+  std::array<uint64_t, 4> chain_bits{};     // the same as bits by joint index (the first 256)
   std::vector<Piece> pieces;
   double radius = 0;
 };
 struct ModelSweepInfo {
   std::vector<LinkInfo> links;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
+};
+
+struct Rate {                     // a joint on a mover's chain, from the mover back to the base
+  int joint;
+  bool prismatic;
+  double d, reach;                // its change over the move; bound on its origin's distance to the mover
 };
 
 struct Mover {                    // a moving robot link, attached object or body
@@ -105,8 +112,10 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
-  double A = 0;                   // a bound on its points' acceleration (<= 3 W B, see bound_movers)
+  double A = 0;                   // a bound on its points' acceleration (<= 3 W B, see tighten_bounds)
   double Bp = 0;                  // a bound on its points' speed (<= B, which makes the grid)
+  int r0 = 0, nr = 0;             // its chain's joint rates: entries r0 .. r0 + nr - 1 of Scratch::rates
+  double reach = 0;               // bound on the distance of its points from the base origin
   // a box the mover stays in during the whole move, when one is known that is tighter than
   // its path bound (see Sweep::bound_movers)
   bool bounded = false;
@@ -220,6 +229,7 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<Rate> rates;
   std::vector<std::array<int, 2>> mine_ignored;  // gather_candidates: one mover's ignore records
   std::vector<int> fk_joints, fk_moving;  // see Sweep::fk
   std::vector<char> moved;

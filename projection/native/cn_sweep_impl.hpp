@@ -109,6 +109,8 @@ struct Sweep {
 
   void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1);
 
+  void tighten_bounds(const std::vector<btTransform> &lp0);
+
   int first_changing(const std::vector<int> &chain) const;
 
   // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
@@ -163,6 +165,17 @@ struct Sweep {
 
   void prepare();
 
+  std::array<uint64_t, 4> moving_bits{};  // the joints that change, as bits (the first 256)
+  bool many_joints = false;               // a joint past the first 256 changes
+
+  // chain_moves for a link's chain, from its bits
+  bool link_moves(const LinkInfo &li) const {
+    if (base_moves) return true;
+    if (many_joints) return chain_moves(li.chain);
+    return ((li.chain_bits[0] & moving_bits[0]) | (li.chain_bits[1] & moving_bits[1]) |
+            (li.chain_bits[2] & moving_bits[2]) | (li.chain_bits[3] & moving_bits[3])) != 0;
+  }
+
   bool chain_moves(const std::vector<int> &chain) const {
     if (base_moves) return true;
     for (int j : chain)
@@ -170,7 +183,10 @@ struct Sweep {
     return false;
   }
 
-  void end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out);
+  // The link poses for BASE and joint values Q (those NEEDED): the robot's own when it stands so,
+  // else computed into OUT.
+  const std::vector<btTransform> &end_link_poses(const btTransform &base, const std::vector<double> &q,
+                                                 std::vector<btTransform> &out);
 
   void run(double max_step);
 
