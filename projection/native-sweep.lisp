@@ -36,10 +36,14 @@ IVEC of 4 per record."
           do (loop for x in r for k from 0 do (setf (aref v (+ (* 4 i) k)) x)))
     v))
 
+(defparameter *sweep-record-capacity* 128
+  "How many records the first call of a sweep check has room for: a check that reports more
+runs again with room for all of them (the household's checks report up to about a hundred).")
+
 (defun %sweep-records (fn)
   "Call FN with (ints doubles cap) until its records fit; return them as a list of
 (moving-object moving-link hit-object hit-link fraction point), POINT a DVEC of 3."
-  (loop with cap = 8
+  (loop with cap = *sweep-record-capacity*
         do (let* ((iv (make-array (* 4 cap) :element-type '(signed-byte 32)))
                   (dv (make-dvec (* 4 cap)))
                   (n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))

@@ -577,3 +577,19 @@ the moving link's or carried object's position read at each, the robot put back 
           (is (member (fourth records) all :test #'equal))
           (dolist (r records)
             (is (eq (not (member r all :test #'equal)) (not (member r asked :test #'equal))) "~s" r)))))))
+
+(test sweep-records-beyond-the-first-room
+  ;; a check that reports more records than its first call has room for runs again with room
+  ;; for all of them: the same records as with room enough at once
+  (with-open-world (:kitchen t)
+    (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+           (base (cram-native:object-pose w r))
+           (turned (let ((v (copy-seq base)))
+                     (setf (aref v 0) -1.2d0 (aref v 1) -0.4d0 (aref v 5) (sin 1.5d0) (aref v 6) (cos 1.5d0))
+                     v))
+           (q (progn (set-right-arm *right-out*) (cram-native:robot-joints w r)))
+           (at-once (cram-native:robot-sweep-check w r base q turned q))
+           (again (let ((cram-native::*sweep-record-capacity* 2))
+                    (cram-native:robot-sweep-check w r base q turned q))))
+      (is (< 2 (length at-once)) "~d records" (length at-once))
+      (is (equalp at-once again)))))
