@@ -42,6 +42,29 @@ void collect_pieces(const btCollisionShape *s, const btTransform &local, std::ve
 // ROBOT's links as the sweeps need them (chains, pieces, radii), made once per model and
 // remade when a link body's shape is not the one they were made for; kept with ROBOT once
 // checked (its link bodies keep their shapes).
+// btCompoundShape's local box, read through a pointer to its member taken where it may be named
+struct CompoundBoxAccess : btCompoundShape {
+  static btVector3 btCompoundShape::*lo() { return &CompoundBoxAccess::m_localAabbMin; }
+  static btVector3 btCompoundShape::*hi() { return &CompoundBoxAccess::m_localAabbMax; }
+};
+
+}  // namespace
+
+void sweep::CompoundBox::take(const btCompoundShape *c) {
+  // the steps of btCompoundShape::getAabb before the transform
+  const btVector3 &lmin = c->*CompoundBoxAccess::lo(), &lmax = c->*CompoundBoxAccess::hi();
+  half = btScalar(0.5) * (lmax - lmin);
+  centre = btScalar(0.5) * (lmax + lmin);
+  if (!c->getNumChildShapes()) {
+    half.setValue(0, 0, 0);
+    centre.setValue(0, 0, 0);
+  }
+  half += btVector3(c->getMargin(), c->getMargin(), c->getMargin());
+  set = true;
+}
+
+namespace {
+
 std::shared_ptr<const ModelSweepInfo> model_sweep_info(Object &robot) {
   if (robot.sweep_links) return std::static_pointer_cast<const ModelSweepInfo>(robot.sweep_links);
   const Model &md = *robot.model;
@@ -65,6 +88,7 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(Object &robot) {
       if (j < 256) li.chain_bits[j >> 6] |= uint64_t(1) << (j & 63);
     collect_pieces(li.shape, btTransform::getIdentity(), li.pieces, fresh->owned);
     li.radius = shape_radius(li.shape);
+    if (li.shape->isCompound()) li.box.take(static_cast<const btCompoundShape *>(li.shape));
   }
   md.sweep_links = fresh;
   robot.sweep_links = fresh;
@@ -507,7 +531,7 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
       const LinkInfo &li = s->info->links[l];
       if (s->link_moves(li))
         s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity(), &li.chain,
-                     li.pieces, li.radius);
+                     li.pieces, li.radius).box = &li.box;
     }
     s->add_attached(rh, -1, btTransform::getIdentity(), 0);
     s->run(max_step);

@@ -82,8 +82,24 @@ struct Span {                     // a run of pieces held elsewhere
 };
 
 // What a sweep needs of one robot link, the same in every call: kept per model.
+// A compound shape's box as btCompoundShape::getAabb computes it, from its local box and margin
+// kept aside (the shape itself is not read again: a check runs with cold caches).
+struct CompoundBox {
+  bool set = false;
+  btVector3 centre{0, 0, 0}, half{0, 0, 0};  // its local box's centre; half extents with the margin
+  void take(const btCompoundShape *c);
+  void box(const btTransform &t, btVector3 &lo, btVector3 &hi) const {
+    btMatrix3x3 abs_b = t.getBasis().absolute();
+    btVector3 centre_w = t(centre);
+    btVector3 extent = half.dot3(abs_b[0], abs_b[1], abs_b[2]);
+    lo = centre_w - extent;
+    hi = centre_w + extent;
+  }
+};
+
 struct LinkInfo {
   const btCollisionShape *shape = nullptr;  // the link body's shape it was made for
+  CompoundBox box;                          // its box, when it is a compound
   std::vector<int> chain;                   // movable joints from the root to the link
   std::array<uint64_t, 4> chain_bits{};     // the same as bits by joint index (the first 256)
   std::vector<Piece> pieces;
@@ -107,6 +123,14 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel;                // its frame relative to that link (or the base)
   const std::vector<int> *chain = nullptr;  // movable joints from the root to frame_link
   Span pieces;
+  const CompoundBox *box = nullptr;  // its shape's box when kept aside (see aabb)
+  // its shape's box at pose T, as the shape's getAabb gives it
+  void aabb(const btTransform &t, btVector3 &lo, btVector3 &hi) const {
+    if (box && box->set)
+      box->box(t, lo, hi);
+    else
+      co->getCollisionShape()->getAabb(t, lo, hi);
+  }
   int anchor = -1;                // last link on the chain a changing joint moves (-1: the base)
   int anchor_ix = 0;              // its entry in a slot's anchor poses (0: the base)
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)

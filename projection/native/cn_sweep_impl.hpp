@@ -214,7 +214,7 @@ struct Sweep {
       const Mover &m = movers[i];
       size_t sl = at / movers.size();
       slot_pose[at] = time_poses[slot_at[sl] + m.anchor_ix] * m.rel_anchor;
-      m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+      m.aabb(slot_pose[at], slot_lo[at], slot_hi[at]);
       slot_have[at] = 1;
     }
     return at;

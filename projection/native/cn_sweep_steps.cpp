@@ -21,8 +21,8 @@ namespace sweep {
 void Sweep::move_box(const Mover &m, const btTransform &t0, const btTransform &t1, btVector3 &lo,
                      btVector3 &hi) const {
   btVector3 lo0, hi0, lo1, hi1;
-  m.co->getCollisionShape()->getAabb(t0, lo0, hi0);
-  m.co->getCollisionShape()->getAabb(t1, lo1, hi1);
+  m.aabb(t0, lo0, hi0);
+  m.aabb(t1, lo1, hi1);
   double dev = std::min(m.B, 3 * m.W * m.B / 8);
   btVector3 g(dev, dev, dev), p(m.B, m.B, m.B);
   lo = lo0;
