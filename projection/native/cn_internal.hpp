@@ -228,6 +228,9 @@ struct Object {
   std::vector<btRigidBody *> link_rb;           // null for links without collision
   std::vector<std::array<float, 4>> link_rgba;  // override colour (a < 0: model colours)
   bool self_collision = false;
+  // the sweep checks' view of its links (cn_sweep.cpp), made for its link shapes: kept here
+  // once checked against them (null: not yet)
+  std::shared_ptr<const void> sweep_links;
 };
 
 struct Attachment {
@@ -281,6 +284,10 @@ void compute_link_poses(const Object &o, std::vector<btTransform> &out);
 // NEEDED, only the links marked there (every ancestor of a marked link must be marked too).
 void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
                         std::vector<btTransform> &out, const std::vector<char> *needed = nullptr);
+// The same for the child links of JOINTS only (in model order; the other links' poses in OUT are
+// left as they are, and are read where a child's parent is not among them).
+void compute_link_poses_of(const Model &m, const btTransform &base, const std::vector<double> &q,
+                           std::vector<btTransform> &out, const std::vector<int> &joints);
 double model_joint_value(const Model &m, const std::vector<double> &q, int j);  // mimic applied
 void set_query_all(World &w, bool on);
 void move_attached(World &w, int parent, int depth = 0);

@@ -25,7 +25,7 @@ void collect_pieces(const btCollisionShape *s, const btTransform &local, std::ve
     for (int i = 0; i < c->getNumChildShapes(); ++i)
       collect_pieces(c->getChildShape(i), local * c->getChildTransform(i), out, owned);
   } else if (s->isConvex()) {
-    out.push_back({static_cast<const btConvexShape *>(s), local});
+    out.push_back({static_cast<const btConvexShape *>(s), local, local == btTransform::getIdentity()});
   } else {
     btVector3 lo, hi;
     s->getAabb(btTransform::getIdentity(), lo, hi);
@@ -34,21 +34,49 @@ void collect_pieces(const btCollisionShape *s, const btTransform &local, std::ve
     auto box = std::make_unique<btBoxShape>(half);
     box->setMargin(0);
     btTransform at(btQuaternion::getIdentity(), (hi + lo) * 0.5);
-    out.push_back({box.get(), local * at});
+    out.push_back({box.get(), local * at, false});
     owned.push_back(std::move(box));
   }
 }
 
 // ROBOT's links as the sweeps need them (chains, pieces, radii), made once per model and
-// remade when a link body's shape is not the one they were made for.
-std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
+// remade when a link body's shape is not the one they were made for; kept with ROBOT once
+// checked (its link bodies keep their shapes).
+// btCompoundShape's local box, read through a pointer to its member taken where it may be named
+struct CompoundBoxAccess : btCompoundShape {
+  static btVector3 btCompoundShape::*lo() { return &CompoundBoxAccess::m_localAabbMin; }
+  static btVector3 btCompoundShape::*hi() { return &CompoundBoxAccess::m_localAabbMax; }
+};
+
+}  // namespace
+
+void sweep::CompoundBox::take(const btCompoundShape *c) {
+  // the steps of btCompoundShape::getAabb before the transform
+  const btVector3 &lmin = c->*CompoundBoxAccess::lo(), &lmax = c->*CompoundBoxAccess::hi();
+  half = btScalar(0.5) * (lmax - lmin);
+  centre = btScalar(0.5) * (lmax + lmin);
+  if (!c->getNumChildShapes()) {
+    half.setValue(0, 0, 0);
+    centre.setValue(0, 0, 0);
+  }
+  half += btVector3(c->getMargin(), c->getMargin(), c->getMargin());
+  set = true;
+}
+
+namespace {
+
+std::shared_ptr<const ModelSweepInfo> model_sweep_info(Object &robot) {
+  if (robot.sweep_links) return std::static_pointer_cast<const ModelSweepInfo>(robot.sweep_links);
   const Model &md = *robot.model;
   std::lock_guard<std::mutex> lock(md.cache_mu);
   auto info = std::static_pointer_cast<const ModelSweepInfo>(md.sweep_links);
   bool ok = info && info->links.size() == robot.link_rb.size();
   for (size_t l = 0; ok && l < robot.link_rb.size(); ++l)
     ok = (robot.link_rb[l] ? robot.link_rb[l]->getCollisionShape() : nullptr) == info->links[l].shape;
-  if (ok) return info;
+  if (ok) {
+    robot.sweep_links = info;
+    return info;
+  }
   auto fresh = std::make_shared<ModelSweepInfo>();
   fresh->links.resize(robot.link_rb.size());
   for (size_t l = 0; l < robot.link_rb.size(); ++l) {
@@ -56,10 +84,14 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
     LinkInfo &li = fresh->links[l];
     li.shape = robot.link_rb[l]->getCollisionShape();
     link_chain(md, (int)l, li.chain);
+    for (int j : li.chain)
+      if (j < 256) li.chain_bits[j >> 6] |= uint64_t(1) << (j & 63);
     collect_pieces(li.shape, btTransform::getIdentity(), li.pieces, fresh->owned);
     li.radius = shape_radius(li.shape);
+    if (li.shape->isCompound()) li.box.take(static_cast<const btCompoundShape *>(li.shape));
   }
   md.sweep_links = fresh;
+  robot.sweep_links = fresh;
   return fresh;
 }
 
@@ -68,7 +100,7 @@ std::shared_ptr<const ModelSweepInfo> model_sweep_info(const Object &robot) {
 namespace sweep {
 
 Scratch &scratch() {
-  static thread_local Scratch s;
+  static Scratch s;  // under the API lock
   return s;
 }
 
@@ -132,6 +164,21 @@ void Sweep::add_attached(int parent, int frame_link, const btTransform &rel, int
   }
 }
 
+// The largest distance from the line through the origin of a frame along the unit AXIS to a
+// point of mover M, whose frame is at REL in that frame (from its pieces' boxes in that frame).
+static double axis_reach(const Mover &m, const btTransform &rel, const btVector3 &axis) {
+  double r2 = 0;
+  for (const Piece &p : m.pieces) {
+    btVector3 lo, hi;
+    p.shape->getAabb(rel * p.local, lo, hi);
+    for (int k = 0; k < 8; ++k) {
+      btVector3 c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+      r2 = std::max(r2, (double)(c - axis * c.dot(axis)).length2());
+    }
+  }
+  return std::sqrt(r2) + 1e-9;
+}
+
 // W and B of every mover over the whole move (see the file comment), from the chain of its
 // movable joints: the distance between consecutive joint origins is fixed for revolute joints
 // and convex in the value of a prismatic one, so its larger end value bounds it.
@@ -140,6 +187,7 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
   // a robot turning on the spot about the vertical, its joints kept
   bool turn_in_place = robot && base0.getOrigin() == base1.getOrigin() && rot0.x() == 0 &&
                        rot0.y() == 0 && rot1.x() == 0 && rot1.y() == 0 && q0 == q1;
+  sc.rates.clear();
   for (Mover &m : movers) {
     btVector3 o0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel.getOrigin();
     btVector3 o1 = (robot && m.frame_link >= 0 ? lp1[m.frame_link] : base1) * m.rel.getOrigin();
@@ -150,6 +198,7 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
     btVector3 p0 = o0, p1 = o1;
     int k0 = first_changing(*m.chain);
     m.bounded = false;
+    m.r0 = (int)sc.rates.size();
     for (int k = (int)m.chain->size() - 1; k >= 0; --k) {
       int j = (*m.chain)[k];
       int child = robot->model->joints[j].child;
@@ -164,15 +213,19 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
         m.bound_hi = c0 + btVector3(r, r, r);
       }
       double d = std::fabs(dv[j]);
-      if (robot->model->joints[j].type == CN_JOINT_PRISMATIC) {
+      bool prismatic = robot->model->joints[j].type == CN_JOINT_PRISMATIC;
+      if (prismatic) {
         B += d;
       } else {
         W += d;
         B += d * reach;
       }
+      sc.rates.push_back({j, prismatic, d, reach});
     }
     reach += std::max((p0 - base0.getOrigin()).length(), (p1 - base1.getOrigin()).length());
     B += angle * reach;
+    m.nr = (int)sc.rates.size() - m.r0;
+    m.reach = reach;
     if (turn_in_place) {  // the mover's origin circles the base's vertical axis at its height
       const btVector3 &b = base0.getOrigin();
       double rho = std::sqrt((o0.x() - b.x()) * (o0.x() - b.x()) + (o0.y() - b.y()) * (o0.y() - b.y()));
@@ -183,6 +236,51 @@ void Sweep::bound_movers(const std::vector<btTransform> &lp0, const std::vector<
     }
     m.W = W;
     m.B = B;
+  }
+}
+
+// Tighter bounds for the search of the movers that meet something (nc > 0), from the rates
+// bound_movers noted: A, a bound on their points' acceleration, the joints' and the base's
+// rates being constant (a revolute joint's term is its rate times how fast its axis turns and
+// its points move relative to its origin: 2 x the rotation above it x its reach, plus the
+// speeds below it; a prismatic joint's its rate times how fast its axis turns; the base
+// rotation's, about a fixed axis through the base origin, its rate times the speed), never
+// above 3 W B; and Bp, a speed bound for clearing intervals (the grid of the search keeps B):
+// the turn of the joint nearest the mover that changes, or of the base when none does, moves
+// the mover's points at its rate times their distance from its axis (which that turn keeps),
+// not their distance from its origin.
+void Sweep::tighten_bounds(const std::vector<btTransform> &lp0) {
+  for (Mover &m : movers) {
+    if (m.nc == 0) continue;
+    const Rate *rates = sc.rates.data() + m.r0;
+    int nr = m.nr;
+    double W = m.W, B = m.B;
+    double A = 0, S = 0, below = 0;  // S: speed bound of the joints from the mover up to here
+    for (int r = 0; r < nr; ++r) {
+      const Rate &x = rates[r];
+      if (x.prismatic) {
+        S += x.d;
+        A += x.d * (W - below);
+      } else {
+        S += x.d * x.reach;
+        below += x.d;
+        A += x.d * (2 * (W - below) * x.reach + S);
+      }
+    }
+    S += angle * m.reach;
+    A += angle * S;
+    m.A = std::min(A, 3 * W * B);
+    double Bp = B;
+    btTransform mover0 = (robot && m.frame_link >= 0 ? lp0[m.frame_link] : base0) * m.rel;
+    int r = 0;
+    while (r < nr && rates[r].d == 0) ++r;
+    if (r < nr && !rates[r].prismatic) {
+      const JointM &jm = robot->model->joints[rates[r].joint];
+      Bp = B - rates[r].d * (rates[r].reach - axis_reach(m, lp0[jm.child].inverseTimes(mover0), jm.axis.normalized()));
+    } else if (r == nr && angle > 0) {
+      Bp = B - angle * (m.reach - axis_reach(m, base0.inverseTimes(mover0), (rot0.inverse() * rot1).getAxis()));
+    }
+    m.Bp = Bp > 0 && Bp < B ? Bp : B;
   }
 }
 
@@ -242,36 +340,60 @@ void Sweep::set_anchors(const std::vector<btTransform> &lp0) {
   }
 }
 
+// The joints whose child links fk computes: all those needed, and those a changing joint moves.
+void Sweep::plan_fk() {
+  const Model &md = *robot->model;
+  std::vector<char> &moved = sc.moved;
+  moved.assign(md.links.size(), 0);
+  fk_joints.clear();
+  fk_moving.clear();
+  fk_primed = false;
+  for (size_t j = 0; j < md.joints.size(); ++j) {  // parents before children
+    const JointM &jm = md.joints[j];
+    moved[jm.child] = moved[jm.parent] || dv[j] != 0;
+    if (!needed[jm.child]) continue;
+    fk_joints.push_back((int)j);
+    if (moved[jm.child]) fk_moving.push_back((int)j);
+  }
+}
+
 // The joint changes, once the ends are set.
 void Sweep::prepare() {
   base_moves = (base1.getOrigin() - base0.getOrigin()).length2() > 0 || angle > 0;
   if (!robot) return;
   const Model &md = *robot->model;
   dv.assign(q0.size(), 0);
-  for (size_t j = 0; j < q0.size(); ++j)
+  moving_bits = {};
+  for (size_t j = 0; j < q0.size(); ++j) {
     dv[j] = model_joint_value(md, q1, (int)j) - model_joint_value(md, q0, (int)j);
+    if (dv[j] != 0) {
+      if (j < 256) moving_bits[j >> 6] |= uint64_t(1) << (j & 63);
+      else many_joints = true;
+    }
+  }
 }
 
-// The link poses (those NEEDED) for BASE and joint values Q, into OUT: the robot's own when
-// it stands so (the same computation made them), else computed.
-void Sweep::end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out) {
-  if (base == robot->base && q == robot->q && robot->link_pose.size() == robot->model->links.size()) {
-    out = robot->link_pose;
-    return;
-  }
+// The link poses (those NEEDED) for BASE and joint values Q: the robot's own when it stands so
+// (the same computation made them), else computed into OUT.
+const std::vector<btTransform> &Sweep::end_link_poses(const btTransform &base, const std::vector<double> &q,
+                                                      std::vector<btTransform> &out) {
+  if (base == robot->base && q == robot->q && robot->link_pose.size() == robot->model->links.size())
+    return robot->link_pose;
   compute_link_poses(*robot->model, base, q, out, &needed);
+  return out;
 }
 
 void Sweep::run(double max_step) {
   // the boxes of what the movers may meet; the robot's and the carried objects' own boxes
   // are not read (they are left out of the candidates)
   sync_aabbs_except(w, [&](int ob) { return (robot && ob == robot->id) || moving(ob); });
-  std::vector<btTransform> &lp0 = sc.lp0, &lp1 = sc.lp1;
+  const std::vector<btTransform> *ends[2] = {&sc.lp0, &sc.lp1};
   if (robot) {  // the poses at the ends of the links the movers hang from
     mark_needed([](const Mover &m) { return m.frame_link; });
-    end_link_poses(base0, q0, lp0);
-    end_link_poses(base1, q1, lp1);
+    ends[0] = &end_link_poses(base0, q0, sc.lp0);
+    ends[1] = &end_link_poses(base1, q1, sc.lp1);
   }
+  const std::vector<btTransform> &lp0 = *ends[0], &lp1 = *ends[1];
   bound_movers(lp0, lp1);
   // movers that do not move meet nothing they did not touch already
   movers.erase(std::remove_if(movers.begin(), movers.end(),
@@ -290,7 +412,8 @@ void Sweep::run(double max_step) {
         }
     mark_needed([](const Mover &m) { return m.anchor; });
     qt = q0;
-    lp = lp0;
+    lp.resize(robot->model->links.size());  // fk computes every link it reads the first time
+    plan_fk();
   }
   double n_real = std::ceil(std::max(total_rot, total_trans) / max_step);
   if (n_real > 1e5)
@@ -300,7 +423,10 @@ void Sweep::run(double max_step) {
   while ((double)(1 << levels) < n_real) ++levels;
   n = 1 << levels;
   gather_candidates(lp0, lp1);
+  tighten_bounds(lp0);
   point_slot.assign(n + 1, -1);
+  time_poses.clear();
+  time_index.clear();
   size_t expect = (size_t)std::min(n + 1, 2 * levels + 8) * movers.size();
   slot_pose.reserve(expect);
   slot_lo.reserve(expect);
@@ -311,7 +437,10 @@ void Sweep::run(double max_step) {
     std::vector<int> &all = pool[0];
     all.clear();
     for (int c = movers[i].c0; c < movers[i].c0 + movers[i].nc; ++c) all.push_back(c);
-    descend(i, 0, n, 0);
+    if (reference)
+      descend_reference(i, 0, n, 0);
+    else
+      descend(i, 0, n, 0);
   }
 }
 
@@ -343,7 +472,9 @@ void check_common(World &w, const int *ignore4, int n_ignore, double max_step, d
   check_ignore(w, ignore4, n_ignore);
   check_positive(max_step, "maximum step");
   check_positive(tol, "tolerance");
-  if (flags & ~CN_SWEEP_SKIP_START_CONTACTS) fail(CN_E_ARG, "sweep flags %d, expected 0 or %d", flags, CN_SWEEP_SKIP_START_CONTACTS);
+  if (flags & ~(CN_SWEEP_SKIP_START_CONTACTS | CN_SWEEP_REFERENCE))
+    fail(CN_E_ARG, "sweep flags %d, expected a sum of %d and %d", flags, CN_SWEEP_SKIP_START_CONTACTS,
+         CN_SWEEP_REFERENCE);
   check_output(cap, o4, "contact output");
   check_output(cap, od, "fraction and point output");
 }
@@ -398,9 +529,9 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
     for (size_t l = 0; l < r.link_rb.size(); ++l) {
       if (!r.link_rb[l]) continue;
       const LinkInfo &li = s->info->links[l];
-      if (s->chain_moves(li.chain))
+      if (s->link_moves(li))
         s->add_mover(rh, (int)l, r.link_rb[l], (int)l, btTransform::getIdentity(), &li.chain,
-                     li.pieces, li.radius);
+                     li.pieces, li.radius).box = &li.box;
     }
     s->add_attached(rh, -1, btTransform::getIdentity(), 0);
     s->run(max_step);

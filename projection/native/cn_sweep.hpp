@@ -5,6 +5,7 @@
 
 #include <BulletCollision/CollisionShapes/btConvexInternalShape.h>
 #include <algorithm>
+#include <cstring>
 
 namespace cn {
 namespace sweep {
@@ -69,6 +70,9 @@ struct Closest : btCollisionWorld::ContactResultCallback {
 struct Piece {                    // one convex piece of a moving body, in the body frame
   const btConvexShape *shape;
   btTransform local;
+  bool at_origin;                 // local is the identity
+  // the piece's pose for the body's pose T (T itself when at_origin: the product would be T)
+  btTransform placed(const btTransform &t) const { return at_origin ? t : t * local; }
 };
 
 struct Span {                     // a run of pieces held elsewhere
@@ -78,15 +82,38 @@ struct Span {                     // a run of pieces held elsewhere
 };
 
 // What a sweep needs of one robot link, the same in every call: kept per model.
+// A compound shape's box as btCompoundShape::getAabb computes it, from its local box and margin
+// kept aside (the shape itself is not read again: a check runs with cold caches).
+struct CompoundBox {
+  bool set = false;
+  btVector3 centre{0, 0, 0}, half{0, 0, 0};  // its local box's centre; half extents with the margin
+  void take(const btCompoundShape *c);
+  void box(const btTransform &t, btVector3 &lo, btVector3 &hi) const {
+    btMatrix3x3 abs_b = t.getBasis().absolute();
+    btVector3 centre_w = t(centre);
+    btVector3 extent = half.dot3(abs_b[0], abs_b[1], abs_b[2]);
+    lo = centre_w - extent;
+    hi = centre_w + extent;
+  }
+};
+
 struct LinkInfo {
   const btCollisionShape *shape = nullptr;  // the link body's shape it was made for
+  CompoundBox box;                          // its box, when it is a compound
   std::vector<int> chain;                   // movable joints from the root to the link
+  std::array<uint64_t, 4> chain_bits{};     // the same as bits by joint index (the first 256)
   std::vector<Piece> pieces;
   double radius = 0;
 };
 struct ModelSweepInfo {
   std::vector<LinkInfo> links;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
+};
+
+struct Rate {                     // a joint on a mover's chain, from the mover back to the base
+  int joint;
+  bool prismatic;
+  double d, reach;                // its change over the move; bound on its origin's distance to the mover
 };
 
 struct Mover {                    // a moving robot link, attached object or body
@@ -96,11 +123,23 @@ struct Mover {                    // a moving robot link, attached object or bod
   btTransform rel;                // its frame relative to that link (or the base)
   const std::vector<int> *chain = nullptr;  // movable joints from the root to frame_link
   Span pieces;
+  const CompoundBox *box = nullptr;  // its shape's box when kept aside (see aabb)
+  // its shape's box at pose T, as the shape's getAabb gives it
+  void aabb(const btTransform &t, btVector3 &lo, btVector3 &hi) const {
+    if (box && box->set)
+      box->box(t, lo, hi);
+    else
+      co->getCollisionShape()->getAabb(t, lo, hi);
+  }
   int anchor = -1;                // last link on the chain a changing joint moves (-1: the base)
   int anchor_ix = 0;              // its entry in a slot's anchor poses (0: the base)
   btTransform rel_anchor;         // its frame relative to the anchor (or the base)
   double radius = 0;              // bound on |point - frame origin| over its shape
   double W = 0, B = 0;            // summed rotation and path-length bound over the whole move
+  double A = 0;                   // a bound on its points' acceleration (<= 3 W B, see tighten_bounds)
+  double Bp = 0;                  // a bound on its points' speed (<= B, which makes the grid)
+  int r0 = 0, nr = 0;             // its chain's joint rates: entries r0 .. r0 + nr - 1 of Scratch::rates
+  double reach = 0;               // bound on the distance of its points from the base origin
   // a box the mover stays in during the whole move, when one is known that is tighter than
   // its path bound (see Sweep::bound_movers)
   bool bounded = false;
@@ -141,9 +180,70 @@ struct Cand {
   }
 };
 
-// The working arrays of the sweeps of one thread, kept from one call to the next so that a
-// check does not allocate them afresh (each use sets the size it needs and every entry it reads).
+// A table from times (doubles, compared by their bits) to entries, emptied in O(1) per sweep.
+struct TimeIndex {
+  std::vector<uint64_t> key;
+  std::vector<uint32_t> gen;  // the key is set when its gen is the table's
+  std::vector<size_t> val;
+  uint32_t cur = 1;
+  size_t used = 0;
+  void clear() {
+    if (++cur == 0) {  // wrapped: forget every entry for real
+      std::fill(gen.begin(), gen.end(), 0);
+      cur = 1;
+    }
+    used = 0;
+  }
+  static size_t hash(uint64_t k) { return (size_t)((k ^ (k >> 29)) * 0x9E3779B97F4A7C15ull >> 20); }
+  // The entry of T, or SIZE_MAX when it has none.
+  size_t find(double t) const {
+    if (key.empty()) return SIZE_MAX;
+    uint64_t k;
+    std::memcpy(&k, &t, 8);
+    for (size_t i = hash(k) & (key.size() - 1);; i = (i + 1) & (key.size() - 1)) {
+      if (gen[i] != cur) return SIZE_MAX;
+      if (key[i] == k) return val[i];
+    }
+  }
+  void insert(double t, size_t v) {
+    if (2 * (used + 1) > key.size()) grow();
+    uint64_t k;
+    std::memcpy(&k, &t, 8);
+    size_t i = hash(k) & (key.size() - 1);
+    while (gen[i] == cur) i = (i + 1) & (key.size() - 1);
+    key[i] = k;
+    gen[i] = cur;
+    val[i] = v;
+    ++used;
+  }
+  void grow() {
+    std::vector<uint64_t> k2 = std::move(key);
+    std::vector<uint32_t> g2 = std::move(gen);
+    std::vector<size_t> v2 = std::move(val);
+    size_t n = std::max<size_t>(64, 2 * k2.size());
+    key.assign(n, 0);
+    gen.assign(n, 0);
+    val.assign(n, 0);
+    uint32_t old = cur;
+    cur = 1;
+    used = 0;
+    for (size_t i = 0; i < k2.size(); ++i)
+      if (g2[i] == old) {
+        double t;
+        std::memcpy(&t, &k2[i], 8);
+        insert(t, v2[i]);
+      }
+  }
+};
+
+// The working arrays of the sweeps, kept from one call to the next so that a check does not
+// allocate them afresh (each use sets the size it needs and every entry it reads). One for the
+// process: the library's entry points run one at a time (the API lock), from whatever thread.
 struct Scratch {
+  std::vector<double> q0, q1, qt, dv;
+  std::vector<Mover> movers;
+  std::vector<int> moving_ids;
+  std::vector<Hit> hits;
   std::vector<char> needed;
   std::vector<btTransform> lp, lp0, lp1, slot_pose;
   std::vector<const btCollisionObject *> found;
@@ -153,8 +253,14 @@ struct Scratch {
   std::vector<double> fb[6];  // the found boxes by coordinate: lo x y z, hi x y z
   std::vector<int> meets;     // the found boxes one move box meets
   std::vector<int> point_slot;
+  std::vector<Rate> rates;
+  std::vector<std::array<int, 2>> mine_ignored;  // gather_candidates: one mover's ignore records
+  std::vector<int> fk_joints, fk_moving;  // see Sweep::fk
+  std::vector<char> moved;
   std::vector<int> anchors;               // the movers' distinct anchors
-  std::vector<btTransform> slot_anchor;   // per slot: the base, then the anchors' poses
+  std::vector<btTransform> time_poses;    // per time: the base, then the anchors' poses
+  TimeIndex time_index;
+  std::vector<size_t> slot_at;            // per slot: its entry in time_poses
   std::vector<char> slot_have;            // per slot and mover: pose and box computed
   std::vector<std::vector<int>> pool;
 };

@@ -8,7 +8,7 @@
 namespace cn {
 namespace sweep {
 
-// The working arrays of the sweeps of this thread (cn_sweep.cpp).
+// The working arrays of the sweeps (cn_sweep.cpp).
 Scratch &scratch();
 
 struct Sweep {
@@ -18,10 +18,10 @@ struct Sweep {
   btTransform base0, base1;
   btQuaternion rot0, rot1;
   double angle = 0;                          // base rotation over the move
-  std::vector<double> q0, q1, qt, dv;        // dv: joint value changes (mimic applied)
+  std::vector<double> &q0 = sc.q0, &q1 = sc.q1, &qt = sc.qt, &dv = sc.dv;  // dv: joint value changes (mimic applied)
   std::vector<char> &needed = sc.needed;
   std::vector<btTransform> &lp = sc.lp;      // link poses at the time asked last
-  std::vector<Mover> movers;
+  std::vector<Mover> &movers = sc.movers;
   std::shared_ptr<const ModelSweepInfo> info;            // the robot's links (model_sweep_info)
   std::vector<std::unique_ptr<std::vector<Piece>>> body_pieces;  // pieces of moving bodies
   std::vector<std::unique_ptr<std::vector<int>>> body_chains;    // chains of attached bodies
@@ -30,7 +30,7 @@ struct Sweep {
   // which it cannot be reached
   std::vector<Cand> &cand = sc.cand;
   std::vector<std::unique_ptr<btCollisionShape>> owned;  // boxes standing in for concave pieces
-  std::vector<int> moving_ids;                           // the robot and what it carries
+  std::vector<int> &moving_ids = sc.moving_ids;          // the robot and what it carries
   bool any_anchor = false;                               // some mover hangs from a moving joint
 
   bool moving(int id) const {
@@ -42,11 +42,17 @@ struct Sweep {
   bool skip_start = false;
   btCollisionObject probe;
   SweptHull hull;
-  std::vector<Hit> hits;
+  std::vector<Hit> &hits = sc.hits;
 
   Sweep(World &wd, const int *ign, int n_ign, double tolerance, int flags)
       : w(wd), ignore4(ign), n_ignore(n_ign), tol(tolerance),
-        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0) {}
+        skip_start((flags & CN_SWEEP_SKIP_START_CONTACTS) != 0),
+        reference((flags & CN_SWEEP_REFERENCE) != 0) {
+    for (auto *v : {&q0, &q1, &qt, &dv}) v->clear();
+    movers.clear();
+    moving_ids.clear();
+    hits.clear();
+  }
 
   void set_ends(const btTransform &a, const btTransform &b);
 
@@ -57,19 +63,40 @@ struct Sweep {
     return btTransform(r, base0.getOrigin().lerp(base1.getOrigin(), t));
   }
 
-  // The frame of mover M at time T; the links the movers hang from (their anchors, see run)
-  // computed into lp, unless FK_DONE says they are for T already.
-  btTransform pose_at(const Mover &m, double t, bool fk_done = false) {
-    btTransform base = base_at(t);
-    if (m.anchor < 0) return base * m.rel_anchor;
-    if (!fk_done) fk(t, base);
-    return lp[m.anchor] * m.rel_anchor;
+  // The frame of mover M at time T, from the base and the links the movers hang from (their
+  // anchors, see run) there, computed once per time (at_time).
+  btTransform pose_at(const Mover &m, double t) {
+    return time_poses[at_time(t) + m.anchor_ix] * m.rel_anchor;
   }
 
+  // The entry in time_poses of the base's and the anchors' poses at time T (computed when first
+  // asked for).
+  size_t at_time(double t) {
+    size_t found = time_index.find(t);
+    if (found != SIZE_MAX) return found;
+    size_t at = time_poses.size(), na = anchors.size() + 1;
+    time_index.insert(t, at);
+    time_poses.resize(at + na);
+    time_poses[at] = base_at(t);
+    if (robot && any_anchor) {
+      fk(t, time_poses[at]);
+      for (size_t a = 1; a < na; ++a) time_poses[at + a] = lp[anchors[a - 1]];
+    }
+    return at;
+  }
+
+  // The poses of the links the movers hang from at time T (the base there BASE), into lp: the
+  // first time all of them, then those a changing joint moves (the others keep their poses
+  // while the base stays: the same base pose and joint values give the same poses).
   void fk(double t, const btTransform &base) {
     for (size_t j = 0; j < qt.size(); ++j) qt[j] = q0[j] + t * (q1[j] - q0[j]);
-    compute_link_poses(*robot->model, base, qt, lp, &needed);
+    compute_link_poses_of(*robot->model, base, qt, lp, fk_primed ? fk_moving : fk_joints);
+    fk_primed = !base_moves;
   }
+  std::vector<int> &fk_joints = sc.fk_joints;  // the joints of the links needed, model order
+  std::vector<int> &fk_moving = sc.fk_moving;  // those of them a changing joint moves
+  bool fk_primed = false;                       // lp holds every needed link's pose
+  void plan_fk();
 
   Mover &add_mover(int obj, int link, const btCollisionObject *co, int frame_link,
                    const btTransform &rel, const std::vector<int> *chain,
@@ -82,6 +109,8 @@ struct Sweep {
 
   void bound_movers(const std::vector<btTransform> &lp0, const std::vector<btTransform> &lp1);
 
+  void tighten_bounds(const std::vector<btTransform> &lp0);
+
   int first_changing(const std::vector<int> &chain) const;
 
   // Whether an ignore pair leaves out every mover's contacts with link HLINK of HOBJ.
@@ -89,17 +118,6 @@ struct Sweep {
     for (int i = 0; i < n_ignore; ++i) {
       const int *r = ignore4 + 4 * i;
       if (r[0] == -1 && r[1] == -1 && (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
-        return true;
-    }
-    return false;
-  }
-
-  bool ignored(const Mover &m, int hobj, int hlink) const {
-    if (w.pair_ignored(m.obj, m.link, hobj, hlink)) return true;
-    for (int i = 0; i < n_ignore; ++i) {
-      const int *r = ignore4 + 4 * i;
-      if ((r[0] == -1 || r[0] == m.obj) && (r[1] == -1 || r[1] == m.link) &&
-          (r[2] == -1 || r[2] == hobj) && (r[3] == -1 || r[3] == hlink))
         return true;
     }
     return false;
@@ -125,6 +143,16 @@ struct Sweep {
 
   void report(const Mover &m, const btCollisionObject *other, double t, const btVector3 &point);
 
+  // the reference search (cn_sweep_reference.cpp, flag CN_SWEEP_REFERENCE)
+  bool reference = false;
+  double distance_reference(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other,
+                            btVector3 *point = nullptr);
+  double confirm_reference(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
+                           double &da, double tb, const btTransform &pb, double &db, btVector3 &point,
+                           int depth);
+  void slot_reference(int k);
+  void descend_reference(size_t i, int ka, int kb, int depth);
+
   Cand *kept = nullptr;  // the pair confirm searches in a sub-step, which keeps the distance
   int kept_k = 0;        // at its end (sub-step point kept_k) for the next sub-step
 
@@ -137,6 +165,17 @@ struct Sweep {
 
   void prepare();
 
+  std::array<uint64_t, 4> moving_bits{};  // the joints that change, as bits (the first 256)
+  bool many_joints = false;               // a joint past the first 256 changes
+
+  // chain_moves for a link's chain, from its bits
+  bool link_moves(const LinkInfo &li) const {
+    if (base_moves) return true;
+    if (many_joints) return chain_moves(li.chain);
+    return ((li.chain_bits[0] & moving_bits[0]) | (li.chain_bits[1] & moving_bits[1]) |
+            (li.chain_bits[2] & moving_bits[2]) | (li.chain_bits[3] & moving_bits[3])) != 0;
+  }
+
   bool chain_moves(const std::vector<int> &chain) const {
     if (base_moves) return true;
     for (int j : chain)
@@ -144,7 +183,10 @@ struct Sweep {
     return false;
   }
 
-  void end_link_poses(const btTransform &base, const std::vector<double> &q, std::vector<btTransform> &out);
+  // The link poses for BASE and joint values Q (those NEEDED): the robot's own when it stands so,
+  // else computed into OUT.
+  const std::vector<btTransform> &end_link_poses(const btTransform &base, const std::vector<double> &q,
+                                                 std::vector<btTransform> &out);
 
   void run(double max_step);
 
@@ -157,7 +199,9 @@ struct Sweep {
   std::vector<std::vector<int>> &pool = sc.pool;        // candidate lists per depth
 
   std::vector<int> &anchors = sc.anchors;                // distinct anchors (Mover::anchor_ix - 1)
-  std::vector<btTransform> &slot_anchor = sc.slot_anchor;  // per slot, 1 + anchors.size() poses
+  std::vector<btTransform> &time_poses = sc.time_poses;  // per time asked, 1 + anchors.size() poses
+  TimeIndex &time_index = sc.time_index;                 // time -> its poses
+  std::vector<size_t> &slot_at = sc.slot_at;             // per slot: its entry in time_poses
   std::vector<char> &slot_have = sc.slot_have;           // per slot and mover
 
   int slot(int k);
@@ -169,8 +213,8 @@ struct Sweep {
     if (!slot_have[at]) {
       const Mover &m = movers[i];
       size_t sl = at / movers.size();
-      slot_pose[at] = slot_anchor[sl * (anchors.size() + 1) + m.anchor_ix] * m.rel_anchor;
-      m.co->getCollisionShape()->getAabb(slot_pose[at], slot_lo[at], slot_hi[at]);
+      slot_pose[at] = time_poses[slot_at[sl] + m.anchor_ix] * m.rel_anchor;
+      m.aabb(slot_pose[at], slot_lo[at], slot_hi[at]);
       slot_have[at] = 1;
     }
     return at;

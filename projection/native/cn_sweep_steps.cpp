@@ -21,8 +21,8 @@ namespace sweep {
 void Sweep::move_box(const Mover &m, const btTransform &t0, const btTransform &t1, btVector3 &lo,
                      btVector3 &hi) const {
   btVector3 lo0, hi0, lo1, hi1;
-  m.co->getCollisionShape()->getAabb(t0, lo0, hi0);
-  m.co->getCollisionShape()->getAabb(t1, lo1, hi1);
+  m.aabb(t0, lo0, hi0);
+  m.aabb(t1, lo1, hi1);
   double dev = std::min(m.B, 3 * m.W * m.B / 8);
   btVector3 g(dev, dev, dev), p(m.B, m.B, m.B);
   lo = lo0;
@@ -103,6 +103,14 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
     int group = mine ? mine->m_collisionFilterGroup : 1, mask = mine ? mine->m_collisionFilterMask : -1;
     const double mlx = mlo[i].x(), mly = mlo[i].y(), mlz = mlo[i].z();
     const double mhx = mhi[i].x(), mhy = mhi[i].y(), mhz = mhi[i].z();
+    // the ignore records that may leave out pairs of this mover: their hit object and link
+    std::vector<std::array<int, 2>> &mine_ignored = sc.mine_ignored;
+    mine_ignored.clear();
+    for (int r = 0; r < n_ignore; ++r) {
+      const int *x = ignore4 + 4 * r;
+      if ((x[0] == -1 || x[0] == m.obj) && (x[1] == -1 || x[1] == m.link)) mine_ignored.push_back({x[2], x[3]});
+    }
+    bool world_ignores = !w.ignored.empty();
     int *out = meets.data();
     size_t k = 0;
     for (size_t f = 0; f < nf; ++f) {
@@ -114,7 +122,10 @@ void Sweep::gather_candidates(const std::vector<btTransform> &lp0, const std::ve
       size_t f = out[q];
       const std::array<int, 4> &id = found.id[f];
       if (!(id[2] & mask) || !(group & id[3])) continue;
-      if (ignored(m, id[0], id[1])) continue;
+      if (world_ignores && w.pair_ignored(m.obj, m.link, id[0], id[1])) continue;
+      bool left_out = false;
+      for (const auto &x : mine_ignored) left_out |= (x[0] == -1 || x[0] == id[0]) && (x[1] == -1 || x[1] == id[1]);
+      if (left_out) continue;
       cand.emplace_back();
       Cand &x = cand.back();
       for (int k = 0; k < 3; ++k) {
@@ -134,7 +145,7 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
                          const btCollisionObject *other) {
   const btBroadphaseProxy *h = other->getBroadphaseHandle();
   for (const Piece &p : m.pieces) {
-    hull.set(p.shape, ta * p.local, tb * p.local, grow);
+    hull.set(p.shape, p.placed(ta), p.placed(tb), grow);
     btVector3 lo, hi;
     hull.getAabb(btTransform::getIdentity(), lo, hi);
     if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
@@ -143,9 +154,16 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
   return false;
 }
 
+// Bullet's contact query of M at pose T with OTHER, up to MAXD. A mover of one convex piece asks
+// it with the piece (which the compound holds): the same contacts, for less work.
 Closest Sweep::distance(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
-  probe.setCollisionShape(const_cast<btCollisionShape *>(m.co->getCollisionShape()));
-  probe.setWorldTransform(t);
+  if (m.pieces.e - m.pieces.b == 1) {
+    probe.setCollisionShape(const_cast<btConvexShape *>(m.pieces.b->shape));
+    probe.setWorldTransform(m.pieces.b->placed(t));
+  } else {
+    probe.setCollisionShape(const_cast<btCollisionShape *>(m.co->getCollisionShape()));
+    probe.setWorldTransform(t);
+  }
   Closest c(maxd);
   w.dw->contactPairTest(&probe, const_cast<btCollisionObject *>(other), c);
   return c;
@@ -156,7 +174,7 @@ Closest Sweep::distance(const Mover &m, const btTransform &t, double maxd, const
 double Sweep::distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
   double d = maxd;
   for (const Piece &p : m.pieces) {
-    d = std::min(d, convex_distance(p.shape, t * p.local, other, d));
+    d = std::min(d, convex_distance(p.shape, p.placed(t), other, d));
     if (d <= 0) break;
   }
   return d;
@@ -187,10 +205,10 @@ bool Sweep::touches(const Mover &m, const btTransform &t, double maxd, const btC
 double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta, const btTransform &pa,
                       double &da, double tb, const btTransform &pb, double &db, int depth, btVector3 &point) {
   double h = tb - ta;
-  double path = h * m.B;
+  double path = h * m.B, reach = h * m.Bp;  // the grid's path bound; how far a point can move
   if (std::isnan(da)) da = distance_at(m, pa, path + tol, other);
   if (da <= 0 && touches(m, pa, path + tol, other, da, point)) return ta;
-  if (da > path) return -1;
+  if (da > reach) return -1;
   bool leaf = path <= tol || depth > 40;
   if (std::isnan(db)) {
     db = distance_at(m, pb, path + tol, other);
@@ -201,8 +219,8 @@ double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta,
     }
   }
   if (db > 0) {
-    if (leaf || da + db > path) return -1;
-    if (!hull_touches(m, pa, pb, 3 * h * h * m.W * m.B / 8, other)) return -1;
+    if (leaf || da + db > reach) return -1;
+    if (!hull_touches(m, pa, pb, h * h * m.A / 8, other)) return -1;
   } else if (leaf) {
     return touches(m, pb, tol, other, db, point) ? tb : -1;
   }
@@ -216,7 +234,7 @@ double Sweep::confirm(const Mover &m, const btCollisionObject *other, double ta,
 // poses and boxes follow when asked for (slot_entry).
 int Sweep::slot(int k) {
   if (point_slot[k] >= 0) return point_slot[k];
-  size_t nm = movers.size(), na = anchors.size() + 1;
+  size_t nm = movers.size();
   int sl = n_slots++;
   point_slot[k] = sl;
   slot_pose.resize((sl + 1) * nm);
@@ -224,14 +242,8 @@ int Sweep::slot(int k) {
   slot_hi.resize((sl + 1) * nm);
   slot_have.resize((sl + 1) * nm);
   std::fill(slot_have.begin() + sl * nm, slot_have.end(), 0);
-  slot_anchor.resize((sl + 1) * na);
-  double t = (double)k / n;
-  btTransform *poses = &slot_anchor[sl * na];
-  poses[0] = base_at(t);
-  if (robot && any_anchor) {
-    fk(t, poses[0]);
-    for (size_t a = 1; a < na; ++a) poses[a] = lp[anchors[a - 1]];
-  }
+  slot_at.resize(sl + 1);
+  slot_at[sl] = at_time((double)k / n);
   return sl;
 }
 
@@ -242,7 +254,9 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
   Mover &m = movers[i];
   size_t a = slot_entry(ka, i), b = slot_entry(kb, i);
   double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
-  double grow = 3 * h * h * m.W * m.B / 8, path = h * m.B;
+  // the chord bound from the acceleration bound A, but at the start of the move from 3 W B (the
+  // pairs met there are those the start's contacts are looked for among, as they always were)
+  double grow = h * h * (ka == 0 ? 3 * m.W * m.B : m.A) / 8, path = h * (ka == 0 ? m.B : m.Bp);
   btVector3 lo = slot_lo[a], hi = slot_hi[a];
   lo.setMin(slot_lo[b]);
   hi.setMax(slot_hi[b]);
@@ -258,9 +272,11 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
     if (x.meets(lo, hi)) keep.push_back(c);
   }
   if (keep.empty()) return;
-  if (kb - ka == 8) {
+  if (kb - ka == 8 || (ka > 0 && (kb - ka == 4 || kb - ka == 2))) {
     // one hull over eight sub-steps clears, in one test, a pair that passes close by
-    // (everything before ta is clear already: the pair is clear up to tb)
+    // (everything before ta is clear already: the pair is clear up to tb); so do hulls over
+    // four and two, where the hull over eight did not, but not at the start of the move, where
+    // the pairs met are those the start's contacts are looked for among
     keep.erase(std::remove_if(keep.begin(), keep.end(),
                               [&](int c) {
                                 if (ta < cand[c].clear_until ||
@@ -300,7 +316,7 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
         report(m, other, ta, point);
         continue;
       }
-      x.clear_until = ta + d / m.B;
+      x.clear_until = ta + d / m.Bp;
       if (tb <= x.clear_until) continue;
       known = d;
     } else {

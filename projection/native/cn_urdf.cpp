@@ -312,6 +312,15 @@ void compute_link_poses(const Model &m, const btTransform &base, const std::vect
   }
 }
 
+void compute_link_poses_of(const Model &m, const btTransform &base, const std::vector<double> &q,
+                           std::vector<btTransform> &out, const std::vector<int> &joints) {
+  out[m.root] = base;
+  for (int j : joints) {
+    const JointM &jm = m.joints[j];
+    out[jm.child] = child_pose(jm, out[jm.parent], joint_value(m, q, j));
+  }
+}
+
 void robot_fk(World &w, Object &o) {
   compute_link_poses(o, o.link_pose);
   for (size_t i = 0; i < o.link_rb.size(); ++i)

@@ -251,6 +251,7 @@ World *copy_world(World &src) {
       Object *o = new Object(*src.objects[i]);
       o->rb = nullptr;
       for (auto &r : o->link_rb) r = nullptr;
+      o->sweep_links = nullptr;
       w->objects[i] = o;
     }
   auto &arr = src.dw->getCollisionObjectArray();

@@ -222,6 +222,8 @@ int cn_ray_test(int world, const double *from3n, const double *to3n, int n,
  * (-1 for a body), hit obj, hit link); doubles (fraction of the move in [0, 1], contact point
  * x y z). -> number of pairs (at most cap written) */
 #define CN_SWEEP_SKIP_START_CONTACTS 1
+/* For tests: the reference search, plain and slower, which must give the same records. */
+#define CN_SWEEP_REFERENCE 2
 int cn_robot_sweep_check(int world, int robot, const double *base_from7, const double *q_from,
                          const double *base_to7, const double *q_to, int nq,
                          const int *ignore4, int n_ignore, double max_step, double tolerance,
@@ -230,6 +232,14 @@ int cn_robot_sweep_check(int world, int robot, const double *base_from7, const d
 int cn_body_sweep_check(int world, int body, const double *from7, const double *to7,
                         const int *ignore4, int n_ignore, double max_step, double tolerance,
                         int flags, int *out4, double *out4d, int cap);
+/* Where moving frames are along the motion cn_robot_sweep_check checks (the same arguments up
+ * to nq): at the steps + 1 times 0, 1/steps .. 1 (1 <= steps <= 10000), the origins of the
+ * n_frames frames2 pairs (robot, link) for a link, (body, -1) for a body the robot carries
+ * rigidly (a body it does not carry stays where it is). out3: n_frames * (steps + 1) * 3
+ * doubles, frame by frame, x y z per time. The world is not changed. -> n_frames */
+int cn_robot_sweep_paths(int world, int robot, const double *base_from7, const double *q_from,
+                         const double *base_to7, const double *q_to, int nq, const int *frames2,
+                         int n_frames, int steps, double *out3);
 
 /* ---- attachments ------------------------------------------------------------------------ */
 /* Attach body `obj` to `parent` (an articulated object with link >= 0, or a body with -1).

@@ -34,7 +34,10 @@ it hits, and where on the way."
   (hit-link nil)
   (fraction 0d0 :type double-float)
   (point nil)
-  (path nil))
+  (%path :unset)
+  ;; its path as (points offset): 17 x y z from OFFSET of the DVEC POINTS, made into SWEEP-PATH's
+  ;; list when first asked for
+  (path-source nil))
 
 (setf (documentation 'sweep-motion 'function) "The label of the motion (\"moving-arm-joints\" ...)."
       (documentation 'sweep-kind 'function) "The kind of motion: :ARM, :TCP, :TORSO, :GRIPPER or :BASE."
@@ -44,7 +47,7 @@ it hits, and where on the way."
       (documentation 'sweep-hit-link 'function) "The link hit (a string) of an articulated object, or NIL."
       (documentation 'sweep-fraction 'function) "Where on the way the first contact is, 0 (start) .. 1 (end)."
       (documentation 'sweep-point 'function) "The map point (x y z) of the first contact."
-      (documentation 'sweep-path 'function) "Map points (x y z) of the moving link or object's frame along the motion, 0 .. 1 in 16 steps.")
+)
 
 (defun sweep-description (sweep)
   "A short text naming SWEEP's moving link or object, what it hits and where on the way."
@@ -115,23 +118,46 @@ is meant to make (INTENDED-CONTACTS: *SWEEP-ALLOWED-CONTACTS*, the grasped and p
                            (t (projection-error "*SWEEP-ALLOWED-CONTACTS* entry ~s: hit ~s, expected an ~
                                                  object name, (object-name link-name) or T." entry hit))))))))
 
-(defun arrival-contact-records (world robot)
+(defun contacts-with (world handle others)
+  "The contacts (object link other other-link) of the object HANDLE with the objects OTHERS
+(handles) of WORLD: those of CRAM-NATIVE:OBJECT-CONTACTS, asked of these objects only."
+  (let ((w (btr:world-handle world)))
+    (and others
+         (loop for (a la b lb) in (cram-native:object-contacts
+                                   w handle :except (loop for o in (btr:objects world)
+                                                          for h = (btr:object-handle o)
+                                                          unless (or (= h handle) (member h others)) collect h))
+               collect (list a la b lb)))))
+
+(defun arrival-contact-records (world robot &optional (records nil records-p))
   "Contacts the motion arrives at on purpose, as ignore records: the robot's hand links
-touching items, and its carried objects touching anything."
+touching items, and its carried objects touching anything. With RECORDS (sweep records), only
+those that could be among them are looked for: the same answer for each of RECORDS."
   (let ((hands (all-hand-links robot))
         (rh (btr:object-handle robot))
-        (records '()))
-    (loop for (a la b lb) in (cram-native:object-contacts (btr:world-handle world) rh)
-          for other = (btr::object-by-handle world b)
-          when (and (= a rh) (>= la 0) (typep other 'btr:item)
-                    (member (btr::link-name-of robot la) hands :test #'string=))
-            do (push (list a la b lb) records))
-    (dolist (entry (btr:attached-objects robot))
-      (let ((o (btr:object world (first entry))))
-        (when o
-          (loop for (a la b lb) in (cram-native:object-contacts (btr:world-handle world) (btr:object-handle o))
-                unless (= b rh) do (push (list a la b lb) records)))))
-    records))
+        (arrivals '()))
+    (flet ((hit-objects (a test)
+             ;; the objects RECORDS hit with A's links that pass TEST, or all objects but the robot
+             (if records-p
+                 (remove-duplicates (loop for (ra la rb) in records
+                                          when (and (= ra a) (funcall test la rb)) collect rb))
+                 (loop for o in (btr:objects world)
+                       for h = (btr:object-handle o)
+                       unless (= h a) collect h))))
+      (loop for (a la b lb) in (contacts-with world rh
+                                              (hit-objects rh (lambda (la b)
+                                                                (and (>= la 0) (typep (btr::object-by-handle world b) 'btr:item)))))
+            for other = (btr::object-by-handle world b)
+            when (and (= a rh) (>= la 0) (typep other 'btr:item)
+                      (member (btr::link-name-of robot la) hands :test #'string=))
+              do (push (list a la b lb) arrivals))
+      (dolist (entry (btr:attached-objects robot))
+        (let ((o (btr:object world (first entry))))
+          (when o
+            (let ((oh (btr:object-handle o)))
+              (loop for (a la b lb) in (contacts-with world oh (remove rh (hit-objects oh (constantly t))))
+                    unless (= b rh) do (push (list a la b lb) arrivals)))))))
+    arrivals))
 
 (defun arrival-candidate-p (world robot records)
   "True when one of the sweep RECORDS (moving-object moving-link hit-object hit-link ...) could
@@ -174,54 +200,36 @@ looked up."
                   :hit-link (and hit (btr::link-name-of hit hl))
                   :fraction fraction :point (coerce point 'list)))))
 
-(defun moving-frame-point (robot sweep)
-  (let ((world (btr:world robot)))
-    (if (sweep-moving-link sweep)
-        (cl-transforms:origin (btr:link-pose robot (sweep-moving-link sweep)))
-        (cl-transforms:origin (btr:pose (btr:object world (sweep-moving sweep)))))))
+(defun sweep-path (sweep)
+  "Map points (x y z) of SWEEP's moving link or object's frame along the motion, 0 .. 1 in 16
+steps."
+  (when (eq (sweep-%path sweep) :unset)
+    (setf (sweep-%path sweep)
+          (destructuring-bind (&optional points offset) (sweep-path-source sweep)
+            (and points
+                 (loop for k from 0 to 16
+                       for i = (+ offset (* 3 k))
+                       collect (list (aref points i) (aref points (+ i 1)) (aref points (+ i 2))))))))
+  (sweep-%path sweep))
 
-(defun fill-sweep-paths (robot before after sweeps)
-  "Set the path of each of SWEEPS: its moving frame at 16 steps from BEFORE to AFTER (robot
-states); ROBOT is left where it is. The robot is set to each step as it moves (base pose, then
-joints), and a link's frame is read from the native link pose: no pose objects per link."
-  (let* ((now (robot-state-vectors robot))
-         (world (btr:world robot))
-         (w (btr:world-handle world)) (h (btr:object-handle robot))
-         (b0 (btr::vector->pose (car before))) (b1 (btr::vector->pose (car after)))
-         (o0 (cl-transforms:origin b0)) (r0 (cl-transforms:orientation b0))
-         (r1 (cl-transforms:orientation b1))
-         (travel (cl-transforms:v- (cl-transforms:origin b1) o0))
-         (q0 (coerce (cdr before) 'cram-native::dvec))
-         (q1 (coerce (cdr after) 'cram-native::dvec))
-         (n (length q0))
-         (indices (let ((v (make-array n :element-type '(signed-byte 32)))) (dotimes (i n v) (setf (aref v i) i))))
-         (q (make-array n :element-type 'double-float))
-         (link-pose (make-array 7 :element-type 'double-float))
-         ;; per sweep: the index of its moving link, or NIL for a carried object
-         (links (mapcar (lambda (s) (and (sweep-moving-link s) (btr:link-index robot (sweep-moving-link s))))
-                        sweeps)))
-    (declare (type cram-native::dvec q0 q1 q link-pose) (type fixnum n))
-    (dolist (s sweeps) (setf (sweep-path s) '()))
-    (unwind-protect
-         (loop for k from 0 to 16
-               for f of-type double-float = (/ k 16d0)
-               do (dotimes (i n)
-                    (setf (aref q i) (+ (aref q0 i) (* f (- (aref q1 i) (aref q0 i))))))
-                  (cram-native:set-object-pose w h (btr::pose->vector
-                                                    (cl-transforms:make-pose
-                                                     (cl-transforms:v+ o0 (cl-transforms:v* travel f))
-                                                     (cl-transforms:slerp r0 r1 f))))
-                  (cram-native:set-robot-joints w h indices q)
-                  (loop for s in sweeps
-                        for link in links
-                        do (push (if link
-                                     (progn (cram-native:robot-link-pose w h link link-pose)
-                                            (list (aref link-pose 0) (aref link-pose 1) (aref link-pose 2)))
-                                     (let ((p (moving-frame-point robot s)))
-                                       (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p))))
-                                 (sweep-path s))))
-      (restore-robot-state robot now))
-    (dolist (s sweeps) (setf (sweep-path s) (nreverse (sweep-path s))))
+(defun (setf sweep-path) (path sweep)
+  "Set SWEEP's path (see SWEEP-PATH)."
+  (setf (sweep-%path sweep) path))
+
+(defun note-sweep-paths (robot before after sweeps)
+  "Give each of SWEEPS its path (SWEEP-PATH): where its moving frame is along ROBOT's motion
+from BEFORE to AFTER (robot states) as the sweep check moves it, the robot left where it is.
+Returns SWEEPS."
+  (let* ((world (btr:world robot)) (rh (btr:object-handle robot))
+         (points (cram-native:robot-sweep-paths
+                  (btr:world-handle world) rh (car before) (cdr before) (car after) (cdr after)
+                  (mapcar (lambda (s)
+                            (if (sweep-moving-link s)
+                                (list rh (btr:link-index robot (sweep-moving-link s)))
+                                (list (btr:object-handle (btr:object world (sweep-moving s))) -1)))
+                          sweeps))))
+    (loop for s in sweeps for i from 0
+          do (setf (sweep-path-source s) (list points (* i 3 17))))
     sweeps))
 
 (defun robot-sweeps (before label kind &key (robot (robot-object)) ignore-links ignore-attached
@@ -246,11 +254,11 @@ and *SWEEP-ALLOWED-CONTACTS*. NIL when *SWEEP-CHECK* is NIL or the robot did not
           ;; the end of the motion) are taken out afterwards
           (when (and records (arrival-candidate-p world robot records)
                      (same-state-p after (robot-state-vectors robot)))
-            (let ((arrivals (arrival-contact-records world robot)))
+            (let ((arrivals (arrival-contact-records world robot records)))
               (setf records (remove-if (lambda (r) (member (subseq r 0 4) arrivals :test #'equal))
                                        records))))
           (when records
-            (fill-sweep-paths robot before after
+            (note-sweep-paths robot before after
                               (mapcar (lambda (r) (sweep-from-record world robot label kind r))
                                       records)))))))
 

@@ -32,7 +32,10 @@
 
 (defun overlay-json (overlay)
   "OVERLAY as sent to the page: a location overlay's costmap becomes a heat map, its samples
-are listed oldest first and the last one validated is the chosen pose."
+are listed oldest first and the last one validated is the chosen pose; a sweep overlay's sweep
+becomes its JSON (SWEEP-OVERLAY)."
+  (when (and (equal (gethash "type" overlay) "sweep") (gethash "sweep" overlay))
+    (return-from overlay-json (sweep-overlay (gethash "sweep" overlay))))
   (if (equal (gethash "type" overlay) "location")
       (let ((samples (sb-thread:with-mutex (*recorder-lock*) (copy-list (gethash "samples" overlay))))
             (costmap (gethash "costmap" overlay)))

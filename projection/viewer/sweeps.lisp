@@ -18,8 +18,9 @@
        "text" (urdf-proj:sweep-description sweep)))
 
 (defun note-sweep (sweep)
-  "Keep SWEEP for the step its motion leads to (see *RECORD-RUNS*)."
+  "Keep SWEEP for the step its motion leads to (see *RECORD-RUNS*); its JSON (SWEEP-OVERLAY) is
+made when the step is sent or written (OVERLAY-JSON)."
   (when *record-runs*
-    (note-overlay (sweep-overlay sweep))))
+    (note-overlay (obj "type" "sweep" "sweep" sweep))))
 
 (pushnew 'note-sweep urdf-proj:*sweep-hooks*)

@@ -99,6 +99,90 @@ static int far_from_origin() {
   return reported;
 }
 
+// The fast search against the reference one (CN_SWEEP_REFERENCE) on seeded random scenes: a
+// five-link robot (torso, arm, hand) among plates, boxes, cylinders and spheres, carrying a box
+// in half of them; arm moves, torso moves, base turns and drives with the arm moving; with and
+// without leaving out start contacts and ignore pairs. The records must be the same to the bit.
+// Returns the number of records compared.
+static const char *TORSO_ARM =
+    "<robot name='torso_arm'><link name='base'><collision><origin xyz='0 0 0.15'/><geometry><box size='0.5 0.5 0.3'/></geometry></collision></link>"
+    "<link name='torso'><collision><origin xyz='0 0 0.3'/><geometry><box size='0.2 0.2 0.6'/></geometry></collision></link>"
+    "<link name='upper'><collision><origin xyz='0.3 0 0'/><geometry><box size='0.6 0.05 0.05'/></geometry></collision></link>"
+    "<link name='fore'><collision><origin xyz='0.2 0 0'/><geometry><cylinder radius='0.03' length='0.4'/></geometry></collision></link>"
+    "<link name='hand'><collision><origin xyz='0.05 0 0'/><geometry><sphere radius='0.04'/></geometry></collision></link>"
+    "<joint name='lift' type='prismatic'><parent link='base'/><child link='torso'/><origin xyz='0 0 0.3'/><axis xyz='0 0 1'/><limit lower='0' upper='0.4' effort='1' velocity='1'/></joint>"
+    "<joint name='yaw' type='revolute'><parent link='torso'/><child link='upper'/><origin xyz='0 0 0.5'/><axis xyz='0 0 1'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "<joint name='pitch' type='revolute'><parent link='upper'/><child link='fore'/><origin xyz='0.6 0 0'/><axis xyz='0 1 0'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>"
+    "<joint name='roll' type='continuous'><parent link='fore'/><child link='hand'/><origin xyz='0.4 0 0'/><axis xyz='1 0 0'/></joint>"
+    "</robot>";
+
+static int fast_equals_reference() {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int compared = 0, differ = 0;
+  for (int scene = 0; scene < 40; ++scene) {
+    int w = cn_world_create(0, 0, -9.81);
+    double bx = 3 * u(rng), by = 3 * u(rng);
+    double base[7] = {bx, by, 0, 0, 0, std::sin(0.3 * scene), std::cos(0.3 * scene)};
+    int r = cn_robot_add_urdf(w, TORSO_ARM, base, 0);
+    std::vector<int> bodies;
+    for (int i = 0; i < 14; ++i) {
+      double a = M_PI * u(rng), rad = 0.3 + 0.4 * (u(rng) + 1), yaw = M_PI * u(rng);
+      double pose[7] = {bx + rad * std::cos(a), by + rad * std::sin(a), 0.7 + 0.4 * u(rng), 0, 0,
+                        std::sin(yaw / 2), std::cos(yaw / 2)};
+      int k = i % 4;
+      bodies.push_back(k == 0   ? cn_body_add_box(w, pose, 0.006, 0.3, 0.3, 0)
+                       : k == 1 ? cn_body_add_box(w, pose, 0.08, 0.08, 0.08, 0)
+                       : k == 2 ? cn_body_add_cylinder(w, pose, 0.04, 0.3, 0)
+                                : cn_body_add_sphere(w, pose, 0.05, 0));
+    }
+    if (scene % 2) {  // a box carried under the hand
+      double lp[7];
+      cn_robot_link_pose(w, r, 4, lp);
+      lp[2] -= 0.08;
+      int cup = cn_body_add_box(w, lp, 0.05, 0.05, 0.1, 0.2);
+      cn_attach(w, cup, r, 4, 0);
+    }
+    int nj = cn_robot_num_joints(w, r);
+    for (int move = 0; move < 20; ++move) {
+      std::vector<double> q0(nj), q1(nj);
+      double b0[7], b1[7];
+      for (int k = 0; k < 7; ++k) b0[k] = b1[k] = base[k];
+      int kind = move % 5;
+      for (int j = 0; j < nj; ++j) {
+        q0[j] = (kind < 2 ? 2.5 : 1.5) * u(rng);
+        q1[j] = kind < 2 ? 2.5 * u(rng) : kind == 4 ? q0[j] + 0.5 * u(rng) : q0[j];
+      }
+      if (kind == 2) {  // the torso alone
+        q0[0] = 0.2 + 0.2 * u(rng);
+        q1[0] = 0.2 + 0.2 * u(rng);
+      } else if (kind == 3) {  // a base turn
+        double y0 = M_PI * u(rng), y1 = y0 + 2 * u(rng);
+        b0[5] = std::sin(y0 / 2), b0[6] = std::cos(y0 / 2), b1[5] = std::sin(y1 / 2), b1[6] = std::cos(y1 / 2);
+      } else if (kind == 4) {  // a base drive, the arm moving
+        b1[0] += 0.3 * u(rng);
+        b1[1] += 0.3 * u(rng);
+      }
+      int ign[4] = {r, 3, bodies[move % bodies.size()], -1};
+      int nign = move % 3 == 1 ? 1 : 0, flags = move % 2 ? CN_SWEEP_SKIP_START_CONTACTS : 0;
+      static int i4[2][4 * 128];
+      static double d4[2][4 * 128];
+      int n[2];
+      for (int ref = 0; ref < 2; ++ref)
+        n[ref] = cn_robot_sweep_check(w, r, b0, q0.data(), b1, q1.data(), nj, nign ? ign : nullptr, nign, 0.05,
+                                      1e-3, flags | (ref ? CN_SWEEP_REFERENCE : 0), i4[ref], d4[ref], 128);
+      if (n[0] != n[1] || n[0] < 0 || std::memcmp(i4[0], i4[1], sizeof(int) * 4 * std::min(n[0], 128)) ||
+          std::memcmp(d4[0], d4[1], sizeof(double) * 4 * std::min(n[0], 128)))
+        ++differ;
+      compared += std::max(n[0], 0);
+    }
+    cn_world_destroy(w);
+  }
+  CHECK(differ == 0);
+  CHECK(compared > 300);
+  return compared;
+}
+
 int main() {
   int w = cn_world_create(0, 0, -9.81);
   int r = cn_robot_add_urdf(w, BAR, ID, 0);
@@ -194,6 +278,31 @@ int main() {
   for (int i = 0; i < at.n; ++i)
     if (at.i4[4 * i] == cup && at.i4[4 * i + 2] == stump) cup_hit = true;
   CHECK(cup_hit);
+  {  // the paths of the finger's and the cup's frames along that move: the finger's origin is
+     // the bar's tip, turning from 0.3 to 2.0 rad; the cup hangs 0.25 m under it
+    int frames[6] = {r, 2, cup, -1, stump, -1};
+    double path[3 * 5 * 3];
+    CHECK(cn_robot_sweep_paths(w, r, low, q0, low, q1, 2, frames, 3, 4, path) == 3);
+    bool ok = true;
+    for (int k = 0; k <= 4; ++k) {
+      double th = q0[0] + k / 4.0 * (q1[0] - q0[0]);
+      const double *f = path + 3 * k, *c = path + 3 * (5 + k), *st = path + 3 * (10 + k);
+      ok &= std::fabs(f[0] - std::cos(th)) < 1e-12 && std::fabs(f[1] - std::sin(th)) < 1e-12 &&
+            std::fabs(f[2] - 0.5) < 1e-12;
+      ok &= std::fabs(c[0] - std::cos(th)) < 1e-9 && std::fabs(c[1] - std::sin(th)) < 1e-9 &&
+            std::fabs(c[2] - 0.25) < 1e-9;
+      ok &= st[0] == far_post[0] && st[1] == far_post[1] && st[2] == far_post[2];  // not carried
+    }
+    CHECK(ok);
+    int bad_link[2] = {r, 9}, bad_body[2] = {stump, 0};
+    CHECK(cn_robot_sweep_paths(w, r, low, q0, low, q1, 2, bad_link, 1, 4, path) == CN_E_HANDLE &&
+          strstr(cn_last_error(), "link 9"));
+    CHECK(cn_robot_sweep_paths(w, r, low, q0, low, q1, 2, bad_body, 1, 4, path) == CN_E_ARG &&
+          strstr(cn_last_error(), "link 0 of body"));
+    CHECK(cn_robot_sweep_paths(w, r, low, q0, low, q1, 2, frames, 1, 0, path) == CN_E_ARG &&
+          strstr(cn_last_error(), "steps 0"));
+    CHECK(cn_robot_sweep_paths(w, r, low, q0, low, q1, 3, frames, 1, 4, path) == CN_E_ARG);
+  }
   CHECK(cn_detach(w, cup, -1) == 1);
   CHECK(cn_object_remove(w, cup) == 0);
 
@@ -269,7 +378,9 @@ int main() {
   CHECK(cn_world_destroy(w) == 0);
 
   int far_hits = far_from_origin();
+  int same = fast_equals_reference();
   printf("cn_sweep_check: %d checks, %d failed (random corpus: %d of 60 moves hit; far from the "
-         "origin: %d pairs)\n", checks, failures, hits, far_hits);
+         "origin: %d pairs; %d records the same as the reference search's)\n", checks, failures, hits,
+         far_hits, same);
   return failures ? 1 : 0;
 }
