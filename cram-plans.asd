@@ -466,7 +466,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "native-queries-tests")
                (:file "native-float-modes-tests")
                (:file "native-fuzz-tests")
-               (:file "native-ik-tests")))
+               (:file "native-ik-tests")
+               (:file "native-reach-map-tests")))
 
 (defsystem "cram-plans/tests/language"
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-language" "cram-plans/cram-common-failures")

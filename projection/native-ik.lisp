@@ -8,6 +8,7 @@
 (defcn "cn_chain_joints" :int (c :int) (out :pointer))
 (defcn "cn_chain_limits" :int (c :int) (lo :pointer) (hi :pointer))
 (defcn "cn_chain_fk" :int (c :int) (q :pointer) (out :pointer))
+(defcn "cn_chain_may_reach" :int (c :int) (position :pointer) (pos-tol :double))
 (defcn "cn_chain_ik" :int (c :int) (target :pointer) (seed :pointer) (restarts :int)
   (pos-tol :double) (rot-tol :double) (rng :unsigned-int) (out :pointer) (err :pointer))
 
@@ -46,6 +47,16 @@ It stays valid when WORLD is destroyed, until DESTROY-CHAIN."
   (let ((qv (%q-vec chain q 'chain-fk "joint values")) (out (make-dvec 7)))
     (with-vector-pointers ((pq qv) (po out)) (ccall "cn_chain_fk" chain pq po))
     out))
+
+(defun chain-may-reach-p (chain position &key (position-tolerance 1d-3))
+  "False when no joint values within CHAIN's limits bring its tip within POSITION-TOLERANCE
+\(metres) of POSITION (x y z, a sequence of reals in the base link frame): the chain's reach
+map, built at its first use, where CHAIN-IK gives such a goal up at once. True otherwise (a
+tolerance above 2 mm: always)."
+  (let ((p (to-dvec position 3 'chain-may-reach-p "position")))
+    (with-vector-pointers ((pp p))
+      (= 1 (ccall "cn_chain_may_reach" chain pp
+                  (real-arg position-tolerance 'chain-may-reach-p "position tolerance"))))))
 
 (defun chain-ik (chain target-pose &key seed (max-restarts 200) (position-tolerance 1d-3)
                                         (rotation-tolerance 1d-2) (random-seed 1))

@@ -32,7 +32,7 @@
    #:render #:render-png #:write-png #:look-at #:visibility
    ;; inverse kinematics
    #:make-chain #:destroy-chain #:chain-joint-count #:chain-joints #:chain-limits #:chain-fk
-   #:chain-ik))
+   #:chain-ik #:chain-may-reach-p))
 
 (in-package :cram-native)
 

@@ -1,6 +1,7 @@
 // Kinematic chains of articulated objects: forward kinematics with KDL, inverse kinematics
 // with a damped least-squares (Levenberg-Marquardt) solver on the chain's geometric Jacobian.
 #include "cn_internal.hpp"
+#include "cn_reach_map.hpp"
 
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
@@ -48,7 +49,27 @@ struct Chain {
   Mat3 tip_R = Mat3::Identity();    // fixed transform from the last joint's frame to the tip
   Vec3 tip_p = Vec3::Zero();
   std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
+  std::unique_ptr<ReachMap> reach;  // where the tip can be: built at the first IK call
 };
+
+// The chain's reach map, built at the first call (entry points run one at a time).
+const ReachMap &reach_map(Chain &c) {
+  if (!c.reach) {
+    std::vector<ReachJoint> joints(c.kin.size());
+    for (size_t i = 0; i < c.kin.size(); ++i) {
+      const KinJoint &k = c.kin[i];
+      joints[i].R = k.R;
+      joints[i].p = k.p;
+      joints[i].axis = k.axis;
+      joints[i].prismatic = k.prismatic;
+      // an unlimited prismatic joint has no range to sample: no map
+      joints[i].lower = k.range == Range::Free ? -HUGE_VAL : c.lower[i];
+      joints[i].upper = k.range == Range::Free ? HUGE_VAL : c.upper[i];
+    }
+    c.reach = std::make_unique<ReachMap>(joints, c.tip_R, c.tip_p);
+  }
+  return *c.reach;
+}
 
 std::mutex g_chain_mutex;
 std::vector<Chain *> g_chains;
@@ -426,6 +447,17 @@ int cn_chain_limits(int h, double *lo, double *hi) {
   });
 }
 
+int cn_chain_may_reach(int h, const double *position3, double pos_tol) {
+  return guard([&] {
+    Chain &c = chain(h);
+    check_ptr(position3, "position");
+    for (int i = 0; i < 3; ++i)
+      if (!std::isfinite(position3[i])) fail(CN_E_ARG, "position has %s", num(position3[i]).c_str());
+    check_positive(pos_tol, "position tolerance");
+    return reach_map(c).may_reach(Vec3(position3[0], position3[1], position3[2]), pos_tol) ? 1 : 0;
+  });
+}
+
 int cn_chain_fk(int h, const double *q, double *out7) {
   return guard([&] {
     Chain &c = chain(h);
@@ -460,7 +492,9 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     Rng rng{rng_seed};
     Errors err, best_err;
     best_err.cost = HUGE_VAL;
-    for (int attempt = 0; attempt <= max_restarts; ++attempt) {
+    // a goal out of the arm's reach: the seed is the best there is, without a single step
+    const int attempts = reach_map(c).may_reach(position(t), pos_tol) ? max_restarts + 1 : 0;
+    for (int attempt = 0; attempt < attempts; ++attempt) {
       if (attempt > 0)
         for (size_t i = 0; i < n; ++i) start[i] = rng.uniform(c.lower[i], c.upper[i]);
       bool ok = solver.descend(start.data(), err);

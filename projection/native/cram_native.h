@@ -281,6 +281,10 @@ int cn_chain_num_joints(int chain);
 int cn_chain_joints(int chain, int *out_robot_joints);        /* robot joint indices      */
 int cn_chain_limits(int chain, double *out_lower, double *out_upper);
 int cn_chain_fk(int chain, const double *q, double *out7);     /* tip in base_link frame   */
+/* 1 when the tip may come within pos_tol m of position3 (base_link frame), 0 when no joint
+ * values within the limits bring it there (the chain's reach map, built at its first use;
+ * pos_tol above 2 mm: always 1).  cn_chain_ik gives such a goal up before any step. */
+int cn_chain_may_reach(int chain, const double *position3, double pos_tol);
 /* IK for the tip pose (in base_link frame) from seed q; random restarts within the limits
  * drawn from `rng_seed`.  -> 0 solved (within pos_tol m and rot_tol rad), 1 not solved
  * (out_q = best found).  out_err2 (may be NULL): position and rotation error. */

@@ -186,6 +186,21 @@ int main() {
   double q[2] = {0.4, 0.3}, pose[7], sol[2], err[2], seed[2] = {0, 0};
   CHECK(cn_chain_fk(ch, q, pose) == 0);
   CHECK(cn_chain_ik(ch, pose, seed, 20, 1e-3, 1e-2, 7, sol, err) == 0 && err[0] < 1e-3);
+  // the reach map: every tip position is "may reach", a point far off is not, and an IK goal
+  // there is given up with the seed's error
+  int ruled_out = 0;
+  for (int i = 0; i < 400; ++i) {
+    double qi[2] = {-3 + 6 * (i % 20) / 19.0, -3 + 6 * (i / 20) / 19.0};
+    CHECK(cn_chain_fk(ch, qi, pose) == 0);
+    if (cn_chain_may_reach(ch, pose, 1e-3) != 1) ++ruled_out;
+  }
+  CHECK(ruled_out == 0);
+  double far[7] = {50, 0, 0, 0, 0, 0, 1};
+  CHECK(cn_chain_may_reach(ch, far, 1e-3) == 0);
+  CHECK(cn_chain_may_reach(ch, far, 1.0) == 1);  // a tolerance the map does not answer for
+  CHECK(cn_chain_ik(ch, far, seed, 20, 1e-3, 1e-2, 7, sol, err) == 1 && err[0] > 40);
+  double nan_pos[3] = {NAN, 0, 0};
+  CHECK(cn_chain_may_reach(ch, nan_pos, 1e-3) == CN_E_ARG && strstr(cn_last_error(), "NaN"));
   CHECK(cn_chain_destroy(ch) == 0);
   CHECK(cn_chain_fk(ch, q, pose) == CN_E_HANDLE);
 
