@@ -37,6 +37,9 @@ struct KinJoint {
   int unit_axis = -1;
   double unit_sign = 1;
   Range range = Range::Clamp;
+  // what the forward kinematics may leave out (the same numbers: only products with 0 and 1)
+  bool R_identity = false;  // R is the identity
+  int p_axis = 3;           // p is zero (-1), along one coordinate axis (0..2), or general (3)
 };
 
 struct Chain {
@@ -160,9 +163,12 @@ void kin_fk(const Chain &c, const double *q, Mat3 &R, Vec3 &p, Jac *J, double ro
   const size_t n = c.kin.size();
   for (size_t i = 0; i < n; ++i) {
     const KinJoint &k = c.kin[i];
-    p += R * k.p;
-    R = R * k.R;
-    Vec3 z = R * k.axis;
+    if (k.p_axis == 3)
+      p += R * k.p;
+    else if (k.p_axis >= 0)
+      p += R.col(k.p_axis) * k.p(k.p_axis);
+    if (!k.R_identity) R = R * k.R;
+    Vec3 z = k.unit_axis >= 0 ? Vec3(k.unit_sign * R.col(k.unit_axis)) : Vec3(R * k.axis);
     if (k.prismatic) {
       p += z * q[i];
       if (J) J->col(i) << z, Vec3::Zero();
@@ -384,6 +390,12 @@ int cn_chain_create(int wh, int r, const char *base, const char *tip) {
             k.unit_sign = k.axis(a) > 0 ? 1 : -1;
           }
         k.range = lim ? Range::Clamp : k.prismatic ? Range::Free : Range::Wrap;
+        k.R_identity = k.R == Mat3::Identity();
+        int nonzero = 0;
+        for (int a = 0; a < 3; ++a)
+          if (k.p(a) != 0) ++nonzero, k.p_axis = a;
+        if (nonzero == 0) k.p_axis = -1;
+        if (nonzero > 1) k.p_axis = 3;
         c->kin.push_back(k);
         fixed = btTransform::getIdentity();
       } else {
