@@ -602,36 +602,50 @@ the moving link's or carried object's position read at each, the robot put back 
       (is (= 0 false-alarms))
       (is (< 5 with-contact 38) "~d of ~d moves touch" with-contact moves))))
 
+;; the PR2 at the kitchen table facing it, its right arm moved between seeded random
+;; configurations: FN is called COUNT times with the move's index and a list of ends
+;; (base-from joints-from base-to joints-to) for CRAM-NATIVE:ROBOT-SWEEP-CHECK, the robot standing
+;; at the arm move's end: the arm move, the base turned by YAW-STEP per move with the arm still,
+;; and (with TURN-WITH-ARM) both at once
+(defun map-kitchen-table-moves (fn seed count yaw-step &key turn-with-arm)
+  (let* ((state (sb-ext:seed-random-state seed))
+         (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot))))
+    (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.8547d0 -0.381d0 0)
+                                                      (cl-transforms:axis-angle->quaternion
+                                                       (cl-transforms:make-3d-vector 0 0 1) (/ pi -2))))
+    (let ((base (cram-native:object-pose w r)))
+      (dotimes (k count)
+        (let ((qa (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+              (qb (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
+              (turned (let ((v (copy-seq base)) (yaw (- (* yaw-step k) 3d0)))
+                        (setf (aref v 3) 0d0 (aref v 4) 0d0 (aref v 5) (sin (/ yaw 2)) (aref v 6) (cos (/ yaw 2)))
+                        v)))
+          (funcall fn k (append (list (list base qa base qb) (list base qa turned qa))
+                                (and turn-with-arm (list (list base qa turned qb))))))))))
+
 (test contact-points-lie-on-what-is-hit
   ;; seeded right-arm moves of the PR2 at the kitchen table, each also with a base turn: the point
   ;; of every record is where the pair touches, on the body hit (within its box grown by 5 cm,
   ;; as contacts count within the shapes' margins); a point left over from another computation
   ;; (the robot's base, another candidate's contact) lies elsewhere
   (with-open-world (:kitchen t)
-    (let* ((state (sb-ext:seed-random-state 31))
-           (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+    (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
            (floor (btr:object-handle (btr:object btr:*current-bullet-world* :floor)))
            (records 0) (off '()))
-      (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.8547d0 -0.381d0 0)
-                                                        (cl-transforms:axis-angle->quaternion
-                                                         (cl-transforms:make-3d-vector 0 0 1) (/ pi -2))))
-      (let ((base (cram-native:object-pose w r)))
-        (dotimes (k 150)
-          (let ((qa (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
-                (qb (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
-                (turned (let ((v (copy-seq base)) (yaw (- (* 0.04d0 k) 3d0)))
-                          (setf (aref v 3) 0d0 (aref v 4) 0d0 (aref v 5) (sin (/ yaw 2)) (aref v 6) (cos (/ yaw 2)))
-                          v)))
-            (dolist (ends (list (list base qa base qb) (list base qa turned qa)))
-              (dolist (record (apply #'cram-native:robot-sweep-check w r
-                                     (append ends (list :ignore (list (list -1 -1 floor -1))))))
-                (destructuring-bind (mo ml ho hl fraction point) record
-                  (declare (ignore mo ml fraction))
-                  (incf records)
-                  (let ((box (cram-native:object-aabb w ho hl)))
-                    (unless (loop for i below 3
-                                  always (<= (- (aref box i) 0.05d0) (aref point i) (+ (aref box (+ i 3)) 0.05d0)))
-                      (push record off)))))))))
+      (map-kitchen-table-moves
+       (lambda (k move)
+         (declare (ignore k))
+         (dolist (ends move)
+           (dolist (record (apply #'cram-native:robot-sweep-check w r
+                                  (append ends (list :ignore (list (list -1 -1 floor -1))))))
+             (destructuring-bind (mo ml ho hl fraction point) record
+               (declare (ignore mo ml fraction))
+               (incf records)
+               (let ((box (cram-native:object-aabb w ho hl)))
+                 (unless (loop for i below 3
+                               always (<= (- (aref box i) 0.05d0) (aref point i) (+ (aref box (+ i 3)) 0.05d0)))
+                   (push record off)))))))
+       31 150 0.04d0)
       (is (< 100 records) "~d records" records)
       (is (null off) "~d of ~d contact points off the body hit, e.g. ~s" (length off) records (subseq off 0 (min 6 (length off)))))))
 
@@ -639,26 +653,18 @@ the moving link's or carried object's position read at each, the robot put back 
   ;; seeded right-arm moves of the PR2 at the kitchen table, with base turns: the sweep check's
   ;; search gives the same records, to the bit, as its plain reference search (:reference t)
   (with-open-world (:kitchen t)
-    (let* ((state (sb-ext:seed-random-state 41))
-           (w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
+    (let* ((w (btr:world-handle btr:*current-bullet-world*)) (r (btr:object-handle (robot)))
            (floor (btr:object-handle (btr:object btr:*current-bullet-world* :floor)))
            (records 0) (differ '()))
-      (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -1.8547d0 -0.381d0 0)
-                                                        (cl-transforms:axis-angle->quaternion
-                                                         (cl-transforms:make-3d-vector 0 0 1) (/ pi -2))))
-      (let ((base (cram-native:object-pose w r)))
-        (dotimes (k 60)
-          (let ((qa (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
-                (qb (progn (set-right-arm (random-arm state)) (cram-native:robot-joints w r)))
-                (turned (let ((v (copy-seq base)) (yaw (- (* 0.1d0 k) 3d0)))
-                          (setf (aref v 3) 0d0 (aref v 4) 0d0 (aref v 5) (sin (/ yaw 2)) (aref v 6) (cos (/ yaw 2)))
-                          v)))
-            (dolist (ends (list (list base qa base qb) (list base qa turned qa) (list base qa turned qb)))
-              (let* ((keys (list :ignore (list (list -1 -1 floor -1)) :skip-start-contacts (oddp k)))
-                     (fast (apply #'cram-native:robot-sweep-check w r (append ends keys)))
-                     (plain (apply #'cram-native:robot-sweep-check w r (append ends keys (list :reference t)))))
-                (incf records (length fast))
-                (unless (equalp fast plain) (push (list fast plain) differ)))))))
+      (map-kitchen-table-moves
+       (lambda (k move)
+         (dolist (ends move)
+           (let* ((keys (list :ignore (list (list -1 -1 floor -1)) :skip-start-contacts (oddp k)))
+                  (fast (apply #'cram-native:robot-sweep-check w r (append ends keys)))
+                  (plain (apply #'cram-native:robot-sweep-check w r (append ends keys (list :reference t)))))
+             (incf records (length fast))
+             (unless (equalp fast plain) (push (list fast plain) differ)))))
+       41 60 0.1d0 :turn-with-arm t)
       (is (< 100 records) "~d records" records)
       (is (null differ) "~d of 180 sweeps differ from the reference search, e.g. ~s" (length differ) (first differ)))))
 

@@ -207,18 +207,6 @@ void seed_into_range(const Chain &c, double *q) {
   keep_in_range(c, q);
 }
 
-// splitmix64: restarts depend on the rng seed only, the same on every platform
-struct Rng {
-  uint64_t state;
-  double uniform(double lo, double hi) {
-    state += 0x9e3779b97f4a7c15ULL;
-    uint64_t z = state;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
-  }
-};
 
 // Tuning of the solver.  The rotation error is weighted as if 1 rad were kRotWeight m.
 constexpr double kRotWeight = 0.4;
@@ -501,7 +489,7 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     for (size_t i = 0; i < n; ++i) start[i] = q0(i);
     seed_into_range(c, start.data());
     best = start;
-    Rng rng{rng_seed};
+    SplitMix64 rng{rng_seed};  // restarts depend on the rng seed only
     Errors err, best_err;
     best_err.cost = HUGE_VAL;
     // a goal out of the arm's reach: the seed is the best there is, without a single step

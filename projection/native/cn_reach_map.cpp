@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 
 namespace cn {
 namespace {
@@ -49,28 +48,15 @@ Vec3 tip_in_first(const std::vector<ReachJoint> &joints, const std::vector<doubl
   return p + R * tip_p;
 }
 
-// splitmix64 in [lo, hi]: the same joints found on every platform
-struct Draw {
-  uint64_t state = 0x5eed;
-  double operator()(double lo, double hi) {
-    state += 0x9e3779b97f4a7c15ULL;
-    uint64_t z = state;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
-  }
-};
-
 // Joints 1 .. n-1 that move the tip at all (a wrist turning about the tip does not).
 std::vector<size_t> moving_joints(const std::vector<ReachJoint> &joints, const Vec3 &tip_p) {
   std::vector<size_t> out;
-  Draw draw;
+  SplitMix64 draw{0x5eed};
   std::vector<double> q(joints.size());
   for (size_t i = 1; i < joints.size(); ++i) {
     bool moves = false;
     for (int trial = 0; trial < 8 && !moves; ++trial) {
-      for (size_t k = 1; k < joints.size(); ++k) q[k] = draw(joints[k].lower, joints[k].upper);
+      for (size_t k = 1; k < joints.size(); ++k) q[k] = draw.uniform(joints[k].lower, joints[k].upper);
       Vec3 a = tip_in_first(joints, q, tip_p);
       for (double v : {joints[i].lower, joints[i].upper, 0.5 * (joints[i].lower + joints[i].upper)}) {
         q[i] = v;

@@ -10,9 +10,24 @@
 #pragma once
 #include <Eigen/Core>
 
+#include <cstdint>
+
 #include <vector>
 
 namespace cn {
+
+// splitmix64: uniform doubles that depend on the seed alone, the same on every platform
+struct SplitMix64 {
+  uint64_t state;
+  double uniform(double lo, double hi) {
+    state += 0x9e3779b97f4a7c15ULL;
+    uint64_t z = state;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
+  }
+};
 
 struct ReachJoint {
   Eigen::Matrix3d R;     // fixed transform from the previous joint's moving frame

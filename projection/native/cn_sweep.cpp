@@ -110,6 +110,25 @@ void Sweep::set_ends(const btTransform &a, const btTransform &b) {
   prepare();
 }
 
+Object &Sweep::set_robot_motion(int rh, const double *base_from7, const double *q_from,
+                                const double *base_to7, const double *q_to, int nq) {
+  Object &r = w.robot(rh);
+  btTransform b0 = read_pose(base_from7, "start base pose"), b1 = read_pose(base_to7, "end base pose");
+  int nj = (int)r.model->joints.size();
+  if (nq != nj) fail(CN_E_ARG, "joint vectors of %d values, expected %d (every joint of object %d)", nq, nj, rh);
+  check_ptr(q_from, "start joint values");
+  check_ptr(q_to, "end joint values");
+  for (int j = 0; j < nj; ++j) {
+    if (!std::isfinite(q_from[j])) fail(CN_E_ARG, "start joint value %d is %s", j, num(q_from[j]).c_str());
+    if (!std::isfinite(q_to[j])) fail(CN_E_ARG, "end joint value %d is %s", j, num(q_to[j]).c_str());
+  }
+  robot = &r;
+  q0.assign(q_from, q_from + nj);
+  q1.assign(q_to, q_to + nj);
+  set_ends(b0, b1);
+  return r;
+}
+
 void Sweep::set_base(const btTransform &a, const btTransform &b) {
   base0 = a;
   base1 = b;
@@ -508,22 +527,9 @@ int cn_robot_sweep_check(int wh, int rh, const double *base_from7, const double 
                          double *outd, int cap) {
   return guard([&] {
     World &w = world(wh);
-    Object &r = w.robot(rh);
-    btTransform b0 = read_pose(base_from7, "start base pose"), b1 = read_pose(base_to7, "end base pose");
-    int nj = (int)r.model->joints.size();
-    if (nq != nj) fail(CN_E_ARG, "joint vectors of %d values, expected %d (every joint of object %d)", nq, nj, rh);
-    check_ptr(q_from, "start joint values");
-    check_ptr(q_to, "end joint values");
-    for (int j = 0; j < nj; ++j) {
-      if (!std::isfinite(q_from[j])) fail(CN_E_ARG, "start joint value %d is %s", j, num(q_from[j]).c_str());
-      if (!std::isfinite(q_to[j])) fail(CN_E_ARG, "end joint value %d is %s", j, num(q_to[j]).c_str());
-    }
     check_common(w, ignore4, n_ignore, max_step, tolerance, flags, cap, out4, outd);
     std::unique_ptr<Sweep> s(new Sweep(w, ignore4, n_ignore, tolerance, flags));
-    s->robot = &r;
-    s->q0.assign(q_from, q_from + nj);
-    s->q1.assign(q_to, q_to + nj);
-    s->set_ends(b0, b1);
+    Object &r = s->set_robot_motion(rh, base_from7, q_from, base_to7, q_to, nq);
     s->info = model_sweep_info(r);
     s->movers.reserve(r.link_rb.size() + w.attachments.size());
     for (size_t l = 0; l < r.link_rb.size(); ++l) {

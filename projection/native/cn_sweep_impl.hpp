@@ -56,6 +56,11 @@ struct Sweep {
 
   void set_ends(const btTransform &a, const btTransform &b);
 
+  // The robot rh of the world and its motion from (base_from7, q_from) to (base_to7, q_to)
+  // (nq joint values each, every joint of the robot), checked, as this sweep's ends.
+  Object &set_robot_motion(int rh, const double *base_from7, const double *q_from,
+                           const double *base_to7, const double *q_to, int nq);
+
   void set_base(const btTransform &a, const btTransform &b);
 
   btTransform base_at(double t) const {
@@ -221,6 +226,10 @@ struct Sweep {
   }
 
   void descend(size_t i, int ka, int kb, int depth);
+  bool gather_interval(size_t a, size_t b, double tb, double grow, double path,
+                       const std::vector<int> &from, std::vector<int> &keep);
+  bool clear_by_hull(const Mover &m, size_t a, size_t b, double ta, double tb, double grow,
+                     std::vector<int> &keep);
 };
 
 }  // namespace sweep

@@ -54,16 +54,9 @@ int cn_robot_sweep_paths(int wh, int rh, const double *base_from7, const double 
                          int n_frames, int steps, double *out3) {
   return guard([&] {
     World &w = world(wh);
-    Object &r = w.robot(rh);
-    btTransform b0 = read_pose(base_from7, "start base pose"), b1 = read_pose(base_to7, "end base pose");
-    int nj = (int)r.model->joints.size();
-    if (nq != nj) fail(CN_E_ARG, "joint vectors of %d values, expected %d (every joint of object %d)", nq, nj, rh);
-    check_ptr(q_from, "start joint values");
-    check_ptr(q_to, "end joint values");
-    for (int j = 0; j < nj; ++j) {
-      if (!std::isfinite(q_from[j])) fail(CN_E_ARG, "start joint value %d is %s", j, num(q_from[j]).c_str());
-      if (!std::isfinite(q_to[j])) fail(CN_E_ARG, "end joint value %d is %s", j, num(q_to[j]).c_str());
-    }
+    Sweep s(w, nullptr, 0, 1e-3, 0);
+    Object &r = s.set_robot_motion(rh, base_from7, q_from, base_to7, q_to, nq);
+    const int nj = nq;  // every joint of the robot
     if (n_frames < 0) fail(CN_E_ARG, "frame count %d, expected >= 0", n_frames);
     if (steps < 1 || steps > 10000) fail(CN_E_ARG, "steps %d, expected 1 .. 10000", steps);
     if (n_frames == 0) return 0;
@@ -71,11 +64,6 @@ int cn_robot_sweep_paths(int wh, int rh, const double *base_from7, const double 
     check_ptr(out3, "path output");
     std::vector<Frame> frames;
     for (int i = 0; i < n_frames; ++i) frames.push_back(frame_of(w, r, frames2[2 * i], frames2[2 * i + 1], i));
-    Sweep s(w, nullptr, 0, 1e-3, 0);
-    s.robot = &r;
-    s.q0.assign(q_from, q_from + nj);
-    s.q1.assign(q_to, q_to + nj);
-    s.set_ends(b0, b1);
     const Model &md = *r.model;
     std::vector<char> needed(md.links.size(), 0);
     for (const Frame &f : frames)

@@ -64,33 +64,9 @@ void Sweep::descend_reference(size_t i, int ka, int kb, int depth) {
   size_t a = slot_entry(ka, i), b = slot_entry(kb, i);
   double h = (double)(kb - ka) / n, ta = (double)ka / n, tb = (double)kb / n;
   double grow = 3 * h * h * m.W * m.B / 8, path = h * m.B;
-  btVector3 lo = slot_lo[a], hi = slot_hi[a];
-  lo.setMin(slot_lo[b]);
-  hi.setMax(slot_hi[b]);
-  lo -= btVector3(grow, grow, grow);
-  hi += btVector3(grow, grow, grow);
-  lo.setMax(slot_lo[a] - btVector3(path, path, path));
-  hi.setMin(slot_hi[a] + btVector3(path, path, path));
   std::vector<int> &keep = pool[depth + 1];
-  keep.clear();
-  for (int c : pool[depth]) {
-    const Cand &x = cand[c];
-    if (x.done || tb <= x.clear_until) continue;
-    if (x.meets(lo, hi)) keep.push_back(c);
-  }
-  if (keep.empty()) return;
-  if (kb - ka == 8) {
-    keep.erase(std::remove_if(keep.begin(), keep.end(),
-                              [&](int c) {
-                                if (ta < cand[c].clear_until ||
-                                    hull_touches(m, slot_pose[a], slot_pose[b], grow, sc.found[cand[c].found]))
-                                  return false;
-                                cand[c].clear_until = tb;
-                                return true;
-                              }),
-               keep.end());
-    if (keep.empty()) return;
-  }
+  if (!gather_interval(a, b, tb, grow, path, pool[depth], keep)) return;
+  if (kb - ka == 8 && !clear_by_hull(m, a, b, ta, tb, grow, keep)) return;
   if (kb - ka > 1) {
     int km = (ka + kb) / 2;
     descend_reference(i, ka, km, depth + 1);

@@ -247,6 +247,42 @@ int Sweep::slot(int k) {
   return sl;
 }
 
+// The candidates of FROM that the interval's box meets (the end boxes of slots a and b grown
+// by GROW, within the start box grown by PATH), into KEEP; false when there is none.
+bool Sweep::gather_interval(size_t a, size_t b, double tb, double grow, double path,
+                            const std::vector<int> &from, std::vector<int> &keep) {
+  btVector3 lo = slot_lo[a], hi = slot_hi[a];
+  lo.setMin(slot_lo[b]);
+  hi.setMax(slot_hi[b]);
+  lo -= btVector3(grow, grow, grow);
+  hi += btVector3(grow, grow, grow);
+  lo.setMax(slot_lo[a] - btVector3(path, path, path));
+  hi.setMin(slot_hi[a] + btVector3(path, path, path));
+  keep.clear();
+  for (int c : from) {
+    const Cand &x = cand[c];
+    if (x.done || tb <= x.clear_until) continue;
+    if (x.meets(lo, hi)) keep.push_back(c);
+  }
+  return !keep.empty();
+}
+
+// The candidates of KEEP that mover m's hull between slots a and b (grown by GROW) clears are
+// clear up to tb and leave KEEP; false when none is left.
+bool Sweep::clear_by_hull(const Mover &m, size_t a, size_t b, double ta, double tb, double grow,
+                          std::vector<int> &keep) {
+  keep.erase(std::remove_if(keep.begin(), keep.end(),
+                            [&](int c) {
+                              if (ta < cand[c].clear_until ||
+                                  hull_touches(m, slot_pose[a], slot_pose[b], grow, sc.found[cand[c].found]))
+                                return false;
+                              cand[c].clear_until = tb;
+                              return true;
+                            }),
+             keep.end());
+  return !keep.empty();
+}
+
 // Mover I over the sub-steps ka .. kb against the candidates pool[depth]: those whose boxes
 // meet the interval's box (the end boxes grown by the chord bound, within the start box
 // grown by the path bound) go down to halves, and at single sub-steps to the checks.
@@ -257,37 +293,15 @@ void Sweep::descend(size_t i, int ka, int kb, int depth) {
   // the chord bound from the acceleration bound A, but at the start of the move from 3 W B (the
   // pairs met there are those the start's contacts are looked for among, as they always were)
   double grow = h * h * (ka == 0 ? 3 * m.W * m.B : m.A) / 8, path = h * (ka == 0 ? m.B : m.Bp);
-  btVector3 lo = slot_lo[a], hi = slot_hi[a];
-  lo.setMin(slot_lo[b]);
-  hi.setMax(slot_hi[b]);
-  lo -= btVector3(grow, grow, grow);
-  hi += btVector3(grow, grow, grow);
-  lo.setMax(slot_lo[a] - btVector3(path, path, path));
-  hi.setMin(slot_hi[a] + btVector3(path, path, path));
   std::vector<int> &keep = pool[depth + 1];
-  keep.clear();
-  for (int c : pool[depth]) {
-    const Cand &x = cand[c];
-    if (x.done || tb <= x.clear_until) continue;
-    if (x.meets(lo, hi)) keep.push_back(c);
-  }
-  if (keep.empty()) return;
-  if (kb - ka == 8 || (ka > 0 && (kb - ka == 4 || kb - ka == 2))) {
-    // one hull over eight sub-steps clears, in one test, a pair that passes close by
-    // (everything before ta is clear already: the pair is clear up to tb); so do hulls over
-    // four and two, where the hull over eight did not, but not at the start of the move, where
-    // the pairs met are those the start's contacts are looked for among
-    keep.erase(std::remove_if(keep.begin(), keep.end(),
-                              [&](int c) {
-                                if (ta < cand[c].clear_until ||
-                                    hull_touches(m, slot_pose[a], slot_pose[b], grow, sc.found[cand[c].found]))
-                                  return false;
-                                cand[c].clear_until = tb;
-                                return true;
-                              }),
-               keep.end());
-    if (keep.empty()) return;
-  }
+  if (!gather_interval(a, b, tb, grow, path, pool[depth], keep)) return;
+  // one hull over eight sub-steps clears, in one test, a pair that passes close by (everything
+  // before ta is clear already: the pair is clear up to tb); so do hulls over four and two,
+  // where the hull over eight did not, but not at the start of the move, where the pairs met
+  // are those the start's contacts are looked for among
+  if ((kb - ka == 8 || (ka > 0 && (kb - ka == 4 || kb - ka == 2))) &&
+      !clear_by_hull(m, a, b, ta, tb, grow, keep))
+    return;
   if (kb - ka > 1) {
     int km = (ka + kb) / 2;
     descend(i, ka, km, depth + 1);
