@@ -265,19 +265,35 @@ pick-and-place plans' *GRASPED-OBJECTS* / *PLACED-OBJECTS*."
             "hand links sweeping the grasped object are reported")
         (is (<= (length grasping) (length plain)))))))
 
+;; a stick held in the right hand (parked), reaching 0.3 m down from the tool frame
+(defun hold-stick ()
+  (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
+    (btr:add-object btr:*current-bullet-world* :box 'stick
+                    `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
+                    :size '(0.02 0.02 0.3) :mass 0.1)
+    (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame")))
+
+;; where SWEEP's moving link or carried object is now, as (x y z)
+(defun moving-frame-xyz (robot sweep)
+  (let ((p (cl-transforms:origin
+            (if (urdf-proj:sweep-moving-link sweep)
+                (btr:link-pose robot (urdf-proj:sweep-moving-link sweep))
+                (btr:pose (btr:object (btr:world robot) (urdf-proj:sweep-moving sweep)))))))
+    (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p))))
+
+;; a board 0.2 m below the tool frame of the right arm half stretched out, the arm parked
+;; again and holding a stick (HOLD-STICK): stretching the arm out sweeps the stick through it
+(defun board-below-the-reach-and-stick ()
+  (set-right-arm (mix *right-park* *right-out* 0.5))
+  (let ((palm (btr:link-pose (robot) "r_gripper_tool_frame")))
+    (add-box 'board (cl-transforms:v+ (cl-transforms:origin palm) (cl-transforms:make-3d-vector 0 0 -0.2))
+             '(0.3 0.3 0.02)))
+  (set-right-arm *right-park*)
+  (hold-stick))
+
 (test carried-object-through-the-board
   (with-open-world ()
-    (set-right-arm (mix *right-park* *right-out* 0.5))
-    (let ((palm (btr:link-pose (robot) "r_gripper_tool_frame")))
-      (add-box 'board (cl-transforms:v+ (cl-transforms:origin palm) (cl-transforms:make-3d-vector 0 0 -0.2))
-               '(0.3 0.3 0.02)))
-    (set-right-arm *right-park*)
-    ;; a stick held in the hand reaching 0.3 m down
-    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
-      (btr:add-object btr:*current-bullet-world* :box 'stick
-                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
-                      :size '(0.02 0.02 0.3) :mass 0.1)
-      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (board-below-the-reach-and-stick)
     (setf urdf-proj:*sweep-check* :warn)
     (is (null (urdf-proj:robot-collisions)))
     (let ((sweeps (recorded-sweeps (lambda () (urdf-proj:move-joints nil *right-out*)))))
@@ -307,11 +323,7 @@ the moving link's or carried object's position read at each, the robot put back 
                                                   (cl-transforms:v* (cl-transforms:v- (cl-transforms:origin b1) (cl-transforms:origin b0)) f))
                                 (cl-transforms:slerp (cl-transforms:orientation b0) (cl-transforms:orientation b1) f))))
                          (cram-native:set-robot-joints w h indices q)
-                         (let ((p (cl-transforms:origin
-                                   (if (urdf-proj:sweep-moving-link sweep)
-                                       (btr:link-pose robot (urdf-proj:sweep-moving-link sweep))
-                                       (btr:pose (btr:object (btr:world robot) (urdf-proj:sweep-moving sweep)))))))
-                           (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p)))))
+                         (moving-frame-xyz robot sweep)))
       (urdf-proj::restore-robot-state robot now))))
 
 (defun same-path-p (a b)
@@ -322,16 +334,7 @@ the moving link's or carried object's position read at each, the robot put back 
   ;; a sweep's path, computed natively without moving the robot, holds the points that moving
   ;; the robot through the motion gives: links and carried objects, an arm motion and a base turn
   (with-open-world ()
-    (set-right-arm (mix *right-park* *right-out* 0.5))
-    (let ((palm (btr:link-pose (robot) "r_gripper_tool_frame")))
-      (add-box 'board (cl-transforms:v+ (cl-transforms:origin palm) (cl-transforms:make-3d-vector 0 0 -0.2))
-               '(0.3 0.3 0.02)))
-    (set-right-arm *right-park*)
-    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
-      (btr:add-object btr:*current-bullet-world* :box 'stick
-                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
-                      :size '(0.02 0.02 0.3) :mass 0.1)
-      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (board-below-the-reach-and-stick)
     (let* ((park (urdf-proj::robot-state-vectors (robot)))
            (out (progn (set-right-arm *right-out*) (urdf-proj::robot-state-vectors (robot))))
            ;; a post on the circle of the stretched-out hand, 1.2 rad on from it
@@ -479,11 +482,7 @@ the moving link's or carried object's position read at each, the robot put back 
       (dolist (carry '(nil t))
         (when carry
           (set-right-arm *right-park*)
-          (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
-            (btr:add-object btr:*current-bullet-world* :box 'stick
-                            `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
-                            :size '(0.02 0.02 0.3) :mass 0.1)
-            (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame")))
+          (hold-stick))
         (dotimes (k 12)
           (let ((before (urdf-proj::robot-state-vectors (robot))))
             (set-right-arm (if (evenp k) *right-out* (random-arm state)))
@@ -516,11 +515,7 @@ the moving link's or carried object's position read at each, the robot put back 
                                                    (* f (- (aref (cdr after) i) (aref (cdr before) i))))))
                           robot)
                          (mapcar (lambda (s)
-                                   (let ((p (cl-transforms:origin
-                                             (if (urdf-proj:sweep-moving-link s)
-                                                 (btr:link-pose robot (urdf-proj:sweep-moving-link s))
-                                                 (btr:pose (btr:object btr:*current-bullet-world* (urdf-proj:sweep-moving s)))))))
-                                     (list (cl-transforms:x p) (cl-transforms:y p) (cl-transforms:z p))))
+                                   (moving-frame-xyz robot s))
                                  sweeps)))
       (urdf-proj::restore-robot-state robot now))))
 
@@ -529,11 +524,7 @@ the moving link's or carried object's position read at each, the robot put back 
   ;; setting the robot to each step and reading the frames, and the robot left where it was
   (with-open-world ()
     (set-right-arm *right-park*)
-    (let ((tool (cl-transforms:origin (btr:link-pose (robot) "r_gripper_tool_frame"))))
-      (btr:add-object btr:*current-bullet-world* :box 'stick
-                      `((,(cl-transforms:x tool) ,(cl-transforms:y tool) ,(- (cl-transforms:z tool) 0.16)) (0 0 0 1))
-                      :size '(0.02 0.02 0.3) :mass 0.1)
-      (btr:attach-object (robot) 'stick :link "r_gripper_tool_frame"))
+    (hold-stick)
     (let* ((before (urdf-proj::robot-state-vectors (robot)))
            (after (progn (set-right-arm *right-out*)
                          (setf (btr:pose (robot)) (cl-transforms:make-pose
