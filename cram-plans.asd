@@ -151,6 +151,7 @@ points in polygons (package CRAM-MATH, CMA)."
                (:file "implementation-package")
                (:file "task-tree")
                (:file "task-pool")
+               (:file "ordered-start")
                (:file "tasks")
                (:file "failures")
                (:file "language")
@@ -478,6 +479,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
                (:file "cpl-api-tests")
                (:file "cpl-tasks-tests")
                (:file "cpl-task-threads-tests")
+               (:file "cpl-ordered-start-tests")
                (:file "cram-walker-tests")
                (:file "language-quiet-log-tests")))
 

@@ -63,12 +63,15 @@ STARTUP and SHUTDOWN: forms run after binding and when leaving (even by a non-lo
 
 (defun call-with-projection-environment (name thunk)
   (let ((runner (car (find-projection-environment name)))
-        (*projection-environment* name))
+        (*projection-environment* name)
+        ;; motions are instants here: concurrent children start in order (same seed, same run)
+        (cpl:*ordered-concurrency* t))
     (call-with-special-projection-variables (lambda () (funcall runner thunk)))))
 
 (defmacro with-projection-environment (name &body body)
   "Run BODY inside the projection environment NAME (an unquoted symbol; any other form is
 evaluated to get the name): its specials are bound, its process modules run,
-its startup and shutdown forms run around BODY. Returns the values of BODY."
+its startup and shutdown forms run around BODY, and CPL:*ORDERED-CONCURRENCY* is true (the
+children of PAR and PURSUE start in order). Returns the values of BODY."
   `(call-with-projection-environment ,(if (symbolp name) `',name name)
                                      (lambda () ,@body)))

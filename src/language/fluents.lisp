@@ -9,7 +9,8 @@
    (changed :initform (bt:make-condition-variable :name "fluent changed")
             :reader fluent-changed)
    (pulse-count :initform 0 :accessor fluent-pulse-count)
-   (dependents :initform '() :accessor fluent-dependents))
+   (dependents :initform '() :accessor fluent-dependents)
+   (waiting-tasks :initform '() :accessor fluent-waiting-tasks))
   (:documentation "The base class of fluents. A fluent is pulsed whenever its
 value (or the value of a fluent it depends on) may have changed; WAIT-FOR and
 WHENEVER wake up on pulses."))
@@ -102,6 +103,8 @@ transitively, on fluents computed from it."
                  (let ((dependents
                          (bt:with-lock-held ((fluent-lock f))
                            (incf (fluent-pulse-count f))
+                           (dolist (task (shiftf (fluent-waiting-tasks f) '()))
+                             (wake-waiting-task task f))
                            (sb-thread:condition-broadcast (fluent-changed f))
                            (live-dependents f))))
                    (mapc #'walk dependents)))))
@@ -127,8 +130,16 @@ when TIMEOUT seconds passed first."
                               (/ (- deadline (monotonic-microseconds)) 1000000))))
           (when (and remaining (<= remaining 0))
             (return nil))
-          (bt:condition-wait (fluent-changed fluent) lock
-                             :timeout (and remaining (float remaining 1d0))))))))
+          (let ((task *current-task*))
+            (when (and task (task-activity task))
+              (push task (fluent-waiting-tasks fluent))
+              (begin-task-wait task fluent))
+            (unwind-protect
+                 (bt:condition-wait (fluent-changed fluent) lock
+                                    :timeout (and remaining (float remaining 1d0)))
+              (when (and task (task-activity task))
+                (setf (fluent-waiting-tasks fluent) (delete task (fluent-waiting-tasks fluent)))
+                (end-task-wait task fluent)))))))))
 
 (defun wait-for (fluent &key timeout)
   "Block until the value of FLUENT is non-NIL and return that value. With

@@ -10,7 +10,8 @@
   '(*standard-output* *error-output* *trace-output* *standard-input* *query-io*
     *debug-io* *terminal-io* *package* *readtable*
     *log-stream* *log-tags* *log-level* *log-tally* *sleep-function*
-    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*)
+    *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*
+    *ordered-concurrency*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
@@ -38,7 +39,9 @@ projection environment's clock or the current designators.")
   (evaporate-requested nil)
   (evaporating nil)
   (aborted nil)
-  (released t))   ; NIL while its thread (SPAWN-TASK) still runs the task's code
+  (released t)    ; NIL while its thread (SPAWN-TASK) still runs the task's code
+  (activity nil)  ; the plan's ACTIVITY under *ORDERED-CONCURRENCY*, else NIL
+  (waiting nil))  ; what it waits on while not counted as running (a task group, a fluent)
 
 (setf (documentation 'task-name 'function) "The name of a task."
       (documentation 'task-status 'function)
@@ -89,7 +92,10 @@ a long or blocking wait."
             (task-values task) values
             (task-failure task) failure
             (task-finish-order task) (incf (task-group-finished group)))
+      ;; the parent, waiting for its children's decision, runs again before this one stops
+      (wake-waiting-task (task-parent task) group)
       (sb-thread:condition-broadcast (task-group-condition group)))
+    (activity-change (task-activity task) -1)
     (note-task-status task)))
 
 (defun evaporate-self (task)
@@ -160,14 +166,16 @@ child tasks' threads remain TASK-EXIT-ERRORs.")
   "Start a thread running THUNK as a child task of the current task, in GROUP.
 With NODE-KIND a task tree node of that kind is created for it; with NODE the
 given node is used."
-  (let* ((task (%make-task :name name :parent *current-task* :index index
-                           :group group :status :running))
+  (let* ((activity (and *current-task* (task-activity *current-task*)))
+         (task (%make-task :name name :parent *current-task* :index index
+                           :group group :status :running :activity activity))
          (bindings (capture-inherited-specials))
          (parent-node *task-tree-node*)
          (node (or node
                    (and node-kind parent-node
                         (make-task-tree-node node-kind (or node-name name)
                                              :parent parent-node)))))
+    (activity-change activity 1)
     (sb-sys:without-interrupts
       (bt:with-lock-held ((task-group-lock group))
         (push task (task-group-tasks group)))
@@ -246,20 +254,24 @@ and all threads joined before this returns. Returns the decision."
   (let ((group (make-task-group)))
     (unwind-protect
          (progn
-           (loop for thunk in thunks
+           (loop for (thunk . more) on thunks
                  for index from 0
                  do (spawn-task (format nil "~a child ~d" name (1+ index))
                                 group index thunk
                                 :node-kind node-kind
                                 :node-name (or (nth index node-names)
-                                               (format nil "child ~d" (1+ index)))))
+                                               (format nil "child ~d" (1+ index))))
+                    (when (and more *ordered-concurrency*)
+                      (wait-until-quiet *current-task*)))
            (let ((tasks (group-tasks-in-order group))
                  (lock (task-group-lock group)))
              (bt:with-lock-held (lock)
                (loop
                  (let ((decision (funcall decide tasks)))
                    (when decision (return decision)))
-                 (sb-thread:condition-wait (task-group-condition group) lock)))))
+                 (begin-task-wait *current-task* group)
+                 (unwind-protect (sb-thread:condition-wait (task-group-condition group) lock)
+                   (end-task-wait *current-task* group))))))
       (evaporate-and-join group))))
 
 (defun resignal-failure (condition)
@@ -270,7 +282,9 @@ and all threads joined before this returns. Returns the decision."
   "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
 thread would: the task's bindings, its outcome in GROUP. Returns the task."
   (let ((task (%make-task :name name :parent nil :index 0 :group group :status :running
-                          :thread sb-thread:*current-thread*)))
+                          :thread sb-thread:*current-thread*
+                          :activity (and *ordered-concurrency* (make-activity)))))
+    (activity-change (task-activity task) 1)
     (bt:with-lock-held ((task-group-lock group))
       (push task (task-group-tasks group)))
     (let ((*current-task* task)
