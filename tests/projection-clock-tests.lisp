@@ -24,27 +24,33 @@
     (signals simple-error (proj:clock-time 42))))
 
 (test partially-ordered-clock-overlaps-parallel-waits
-  (let ((clock (make-instance 'proj:partially-ordered-clock :increment-delay 0.05))
-        end-1 end-2)
-    (cpl:top-level
-      (cpl:par
-        (progn (proj:clock-wait clock 5) (setf end-1 (proj:clock-time clock)))
-        (progn (proj:clock-wait clock 10) (setf end-2 (proj:clock-time clock)))))
-    (is (<= 5 end-1 9.99) "the shorter wait ends first: ~a" end-1)
-    (is (= 10 end-2))
-    (is (= 10 (proj:clock-time clock)) "parallel waits overlap: 10, not 15")))
+  ;; as on a robot, and with the ordered starts of projection (a clock wait lets the next
+  ;; branch start)
+  (dolist (ordered '(nil t))
+    (let ((clock (make-instance 'proj:partially-ordered-clock :increment-delay 0.05))
+          (cpl:*ordered-concurrency* ordered)
+          end-1 end-2)
+      (cpl:top-level
+        (cpl:par
+          (progn (proj:clock-wait clock 5) (setf end-1 (proj:clock-time clock)))
+          (progn (proj:clock-wait clock 10) (setf end-2 (proj:clock-time clock)))))
+      (is (<= 5 end-1 9.99) "the shorter wait ends first: ~a" end-1)
+      (is (= 10 end-2))
+      (is (= 10 (proj:clock-time clock)) "parallel waits overlap: 10, not 15 (ordered ~a)" ordered))))
 
 (test disabled-partially-ordered-clock-does-not-step
-  (let ((clock (make-instance 'proj:partially-ordered-clock :increment-delay 0.02))
-        real-end-of-wait real-end-of-disabled)
-    (cpl:top-level
-      (cpl:par
-        (progn (proj:clock-wait clock 3) (setf real-end-of-wait (get-internal-real-time)))
-        (proj:with-partially-ordered-clock-disabled clock
-          (sleep 0.2)
-          (setf real-end-of-disabled (get-internal-real-time)))))
-    (is (>= real-end-of-wait real-end-of-disabled))
-    (is-true (proj:partially-ordered-clock-enabled clock))))
+  (dolist (ordered '(nil t))
+    (let ((clock (make-instance 'proj:partially-ordered-clock :increment-delay 0.02))
+          (cpl:*ordered-concurrency* ordered)
+          real-end-of-wait real-end-of-disabled)
+      (cpl:top-level
+        (cpl:par
+          (progn (proj:clock-wait clock 3) (setf real-end-of-wait (get-internal-real-time)))
+          (proj:with-partially-ordered-clock-disabled clock
+            (sleep 0.2)
+            (setf real-end-of-disabled (get-internal-real-time)))))
+      (is (>= real-end-of-wait real-end-of-disabled))
+      (is-true (proj:partially-ordered-clock-enabled clock)))))
 
 (defvar *projection-test-counter* :global)
 

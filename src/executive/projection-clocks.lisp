@@ -72,7 +72,10 @@ WITH-PARTIALLY-ORDERED-CLOCK-DISABLED form runs."))
     (sb-thread:with-mutex (lock)
       (push (cons id (+ (clock-time clock) duration)) (clock-waits clock)))
     (unwind-protect
-         (loop
+         ;; a wait of the plan: under ordered starts the siblings of this task may start
+         ;; (and register their waits) meanwhile
+         (cpl:with-task-waiting (clock)
+          (loop
            (when (sb-thread:with-mutex (lock)
                    (<= (cdr (assoc id (clock-waits clock))) (clock-time clock)))
              (return))
@@ -87,7 +90,7 @@ WITH-PARTIALLY-ORDERED-CLOCK-DISABLED form runs."))
                (unless (find-if (lambda (end) (<= end now)) (clock-waits clock) :key #'cdr)
                  (let ((next (loop for (nil . end) in (clock-waits clock) minimize end)))
                    (when (> next now)
-                     (setf (slot-value clock 'time) next)))))))
+                     (setf (slot-value clock 'time) next))))))))
       (sb-thread:with-mutex (lock)
         (setf (clock-waits clock) (remove id (clock-waits clock) :key #'car))))
     (clock-time clock)))

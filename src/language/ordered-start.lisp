@@ -9,22 +9,13 @@
 
 (in-package :cram-language)
 
-(defvar *ordered-concurrency* nil
-  "When true (a projection environment binds it), the children of PAR, PURSUE and TRY-ALL start
-one at a time: each waits until every task of the plan started before it has ended or waits on
-a fluent or for its own children (or until *ORDERED-START-TIMEOUT* has passed). NIL: they all
-start at once, as on a robot.")
-
-(defparameter *ordered-start-timeout* 0.05d0
-  "Seconds a child waits for the plan to become quiet before it starts anyway (a sibling that
-waits in some other way than on a fluent, e.g. polling, must not hold the others forever).")
-
 (defstruct (activity (:constructor make-activity ()))
   "How many tasks of one plan run (not waiting), and the tasks waiting to start a child, the
 most recent first."
   (lock (sb-thread:make-mutex :name "cpl plan activity"))
   (quiet (sb-thread:make-waitqueue :name "cpl plan quiet"))
   (running 0 :type fixnum)
+  (changes 0 :type fixnum)   ; how often RUNNING changed
   (starters '()))
 
 (defun activity-change (activity delta)
@@ -32,6 +23,7 @@ most recent first."
 none runs."
   (when activity
     (sb-thread:with-mutex ((activity-lock activity))
+      (setf (activity-changes activity) (logand (1+ (activity-changes activity)) most-positive-fixnum))
       (when (zerop (incf (activity-running activity) delta))
         (sb-thread:condition-broadcast (activity-quiet activity))))))
 
@@ -56,23 +48,51 @@ none runs."
   "TASK's wait on ON ended: counted as running again, unless its waker did that."
   (wake-waiting-task task on))
 
+(defmacro with-task-waiting ((on) &body body)
+  "Run BODY, a wait of the current task on ON (any object) that no fluent or task group
+expresses (a projection clock's, say), with the task not counted as running: under
+*ORDERED-CONCURRENCY* its siblings may start meanwhile."
+  (let ((task (gensym "TASK")) (what (gensym "ON")))
+    `(let ((,task *current-task*) (,what ,on))
+       (begin-task-wait ,task ,what)
+       (unwind-protect (progn ,@body)
+         (end-task-wait ,task ,what)))))
+
+(defun task-depth (task)
+  "How many tasks TASK lies below its plan's top-level task."
+  (loop for tk = (task-parent task) then (task-parent tk) while tk count t))
+
+(defun next-starter (activity)
+  "Of the tasks of ACTIVITY waiting to start a child, the one to go on first: the deepest in
+the task tree (a nested PAR's children start before the next children of the one around it),
+of those the first to wait."
+  (let ((best nil) (best-depth -1))
+    (dolist (task (reverse (activity-starters activity)) best)
+      (let ((depth (task-depth task)))
+        (when (> depth best-depth) (setf best task best-depth depth))))))
+
 (defun wait-until-quiet (task)
-  "Before TASK starts its next child: wait until no task of its plan runs and TASK is the most
-recent of the tasks waiting so (a nested PAR's children start before those of the one around
-it), or *ORDERED-START-TIMEOUT* has passed. No wait without *ORDERED-CONCURRENCY*."
+  "Before TASK starts its next child: wait until no task of its plan runs and TASK is the next
+of the tasks waiting so (NEXT-STARTER), or *ORDERED-START-TIMEOUT* has passed with nothing
+happening in the plan. No wait without *ORDERED-CONCURRENCY*."
   (let ((activity (and task (task-activity task))))
     (when activity
-      (let ((deadline (+ (monotonic-microseconds)
-                         (round (* *ordered-start-timeout* 1000000)))))
+      (let* ((patience (round (* *ordered-start-timeout* 1000000)))
+             (deadline (+ (monotonic-microseconds) patience))
+             (seen -1))
         (sb-thread:with-mutex ((activity-lock activity))
           (push task (activity-starters activity))
           (decf (activity-running activity))
           (unwind-protect
                (loop until (and (<= (activity-running activity) 0)
-                                (eq (first (activity-starters activity)) task))
-                     do (let ((left (- deadline (monotonic-microseconds))))
-                          (when (<= left 0) (return))
+                                (eq (next-starter activity) task))
+                     do (let ((now (monotonic-microseconds)))
+                          ;; the plan goes on: the timeout counts from its last change
+                          (unless (= seen (activity-changes activity))
+                            (setf seen (activity-changes activity)
+                                  deadline (+ now patience)))
+                          (when (<= deadline now) (return))
                           (sb-thread:condition-wait (activity-quiet activity) (activity-lock activity)
-                                                    :timeout (/ left 1000000d0))))
+                                                    :timeout (/ (- deadline now) 1000000d0))))
             (setf (activity-starters activity) (remove task (activity-starters activity) :count 1))
             (incf (activity-running activity))))))))

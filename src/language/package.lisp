@@ -42,7 +42,7 @@
    #:fl-and #:fl-or #:fl-not #:fl< #:fl> #:fl= #:fl<= #:fl>= #:fl-eq #:fl-eql
    #:fl+ #:fl- #:fl* #:fl/
    ;; time
-   #:sleep #:*sleep-function* #:*ordered-concurrency* #:*ordered-start-timeout* #:unix-time
+   #:sleep #:*sleep-function* #:*ordered-concurrency* #:*ordered-start-timeout* #:with-task-waiting #:unix-time
    ;; task tree
    #:task-tree-node #:with-task-tree-node #:*task-tree-node*
    #:*last-task-tree* #:task-tree-to-json #:write-task-tree-html

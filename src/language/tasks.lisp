@@ -16,6 +16,17 @@
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
 
+(defvar *ordered-concurrency* nil
+  "When true (a projection environment binds it), the children of PAR, PURSUE and TRY-ALL start
+one at a time: each waits until every task of the plan started before it has ended or waits on
+a fluent or for its own children (or until *ORDERED-START-TIMEOUT* has passed). NIL: they all
+start at once, as on a robot.")
+
+(defparameter *ordered-start-timeout* 0.5d0
+  "Seconds a child waits for the plan to become quiet, with no task of the plan starting,
+ending, waiting or waking in that time, before it starts anyway: a sibling that waits in some
+other way than on a fluent (polling, say) must not hold the others forever.")
+
 (defvar *evaporation-target* nil
   "Inside a task's thread, the task while it may be evaporated.")
 
