@@ -69,7 +69,7 @@ const ReachMap &reach_map(Chain &c) {
       joints[i].lower = k.range == Range::Free ? -HUGE_VAL : c.lower[i];
       joints[i].upper = k.range == Range::Free ? HUGE_VAL : c.upper[i];
     }
-    c.reach = std::make_unique<ReachMap>(joints, c.tip_R, c.tip_p);
+    c.reach = std::make_unique<ReachMap>(joints, c.tip_p);
   }
   return *c.reach;
 }
@@ -206,7 +206,6 @@ void seed_into_range(const Chain &c, double *q) {
     }
   keep_in_range(c, q);
 }
-
 
 // Tuning of the solver.  The rotation error is weighted as if 1 rad were kRotWeight m.
 constexpr double kRotWeight = 0.4;

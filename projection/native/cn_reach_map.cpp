@@ -85,8 +85,7 @@ double reach_after(const std::vector<ReachJoint> &joints, size_t i, const Vec3 &
 
 }  // namespace
 
-ReachMap::ReachMap(const std::vector<ReachJoint> &joints, const Mat3 &tip_R, const Vec3 &tip_p) {
-  (void)tip_R;  // the tip's orientation plays no part in where it is
+ReachMap::ReachMap(const std::vector<ReachJoint> &joints, const Vec3 &tip_p) {
   if (joints.empty() || joints[0].prismatic) return;
   for (const ReachJoint &j : joints)
     if (!(std::isfinite(j.lower) && std::isfinite(j.upper) && j.lower <= j.upper)) return;
@@ -119,12 +118,10 @@ bool ReachMap::build(const std::vector<ReachJoint> &joints, const Vec3 &tip_p, d
   const double bound = reach_after(joints, 0, tip_p);
   const int widen = (int)std::floor((kMaxTolerance + slack) / cell) + 1;
   const double margin = (widen + 1) * cell;
-  cell_ = cell;
   h0_ = -(bound + margin);
   n_rho_ = (int)std::ceil((bound + margin) / cell) + 1;
   n_h_ = (int)std::ceil(2 * (bound + margin) / cell) + 1;
   cells_.assign((size_t)n_rho_ * n_h_, 0);
-  samples_ = total;
 
   // Level l turns the moving joint moving[l]; what lies between two moving joints (fixed
   // transforms, other joints at their rest values) is folded into one constant transform
@@ -214,7 +211,7 @@ bool ReachMap::build(const std::vector<ReachJoint> &joints, const Vec3 &tip_p, d
 void ReachMap::mark(const Vec3 &x) {
   double h = x.dot(first_axis_);
   double rho = (x - h * first_axis_).norm();
-  int i = (int)std::floor(rho / cell_), k = (int)std::floor((h - h0_) / cell_);
+  int i = (int)std::floor(rho / kCell), k = (int)std::floor((h - h0_) / kCell);
   if (i >= 0 && i < n_rho_ && k >= 0 && k < n_h_) cells_[(size_t)i * n_h_ + k] = 1;
 }
 
@@ -223,7 +220,7 @@ bool ReachMap::may_reach(const Vec3 &goal, double tolerance) const {
   Vec3 x = first_R_.transpose() * (goal - first_p_);
   double h = x.dot(first_axis_);
   double rho = (x - h * first_axis_).norm();
-  double fi = std::floor(rho / cell_), fk = std::floor((h - h0_) / cell_);
+  double fi = std::floor(rho / kCell), fk = std::floor((h - h0_) / kCell);
   if (!(fi >= 0 && fi < n_rho_ && fk >= 0 && fk < n_h_)) return false;
   return cells_[(size_t)fi * n_h_ + (size_t)fk] != 0;
 }

@@ -45,25 +45,21 @@ class ReachMap {
 
   // An empty map (every answer "maybe") when the chain does not suit: a first joint that is
   // not revolute, an unlimited prismatic joint, or more samples than the budget at a step of 5 cm.
-  ReachMap(const std::vector<ReachJoint> &joints, const Eigen::Matrix3d &tip_R,
-           const Eigen::Vector3d &tip_p);
+  // JOINTS from the chain's base to its tip, TIP_P the tip's offset from the last joint's frame.
+  ReachMap(const std::vector<ReachJoint> &joints, const Eigen::Vector3d &tip_p);
 
   // False only when no configuration within the limits (the first joint's left aside) puts
   // the tip within `tolerance` of `goal` (in the chain's base frame).
   bool may_reach(const Eigen::Vector3d &goal, double tolerance) const;
 
-  bool valid() const { return !cells_.empty(); }
-  double cell() const { return cell_; }
-  long samples() const { return samples_; }
 
  private:
   bool build(const std::vector<ReachJoint> &joints, const Eigen::Vector3d &tip_p, double step);
   void mark(const Eigen::Vector3d &tip_in_first);
   Eigen::Matrix3d first_R_;  // base frame -> first joint frame
   Eigen::Vector3d first_p_, first_axis_;
-  double cell_ = 0, h0_ = 0;  // h of the grid's first row
+  double h0_ = 0;             // h of the grid's first row
   int n_rho_ = 0, n_h_ = 0;
-  long samples_ = 0;
   std::vector<unsigned char> cells_;  // n_rho_ x n_h_, row-major by rho
 };
 

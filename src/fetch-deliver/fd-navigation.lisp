@@ -67,14 +67,13 @@ for the arms, torso and grippers it was found with."
 ACCEPTED, NIL unless it is free there and ACCEPT (a function of the pose) accepts it (then
 ACCEPT's value). A pose judged before within *BASE-POSE-VERDICTS* for the same robot joints
 and WHAT (a list naming what ACCEPT checks) gives the same verdict without a check."
-  (let ((key (and *base-pose-verdicts* (list* (base-pose-key pose) (robot-joints-key) what))))
-    (multiple-value-bind (verdict found) (if key (base-pose-verdict key) (values nil nil))
+  (let ((key (and (base-pose-verdicts-p) (list* (base-pose-key pose) (robot-joints-key) what))))
+    (multiple-value-bind (verdict found) (base-pose-verdict key)
       (if found
           (values (car verdict) (cdr verdict))
           (let* ((hits (base-pose-collisions pose))
                  (accepted (and (null hits) (or (funcall accept pose) nil))))
-            (when key
-              (setf (base-pose-verdict key) (cons accepted hits)))
+            (setf (base-pose-verdict key) (cons accepted hits))
             (values accepted hits))))))
 
 (defun check-navigating-collisions (location &key (accept (constantly t)) what)

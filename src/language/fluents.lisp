@@ -130,16 +130,15 @@ when TIMEOUT seconds passed first."
                               (/ (- deadline (monotonic-microseconds)) 1000000))))
           (when (and remaining (<= remaining 0))
             (return nil))
-          (let ((task *current-task*))
-            (when (and task (task-activity task))
-              (push task (fluent-waiting-tasks fluent))
-              (begin-task-wait task fluent))
-            (unwind-protect
+          ;; a pulse counts the tasks waiting here as running again (PULSE)
+          (when (and *current-task* (task-activity *current-task*))
+            (push *current-task* (fluent-waiting-tasks fluent)))
+          (unwind-protect
+               (with-task-waiting (fluent)
                  (bt:condition-wait (fluent-changed fluent) lock
-                                    :timeout (and remaining (float remaining 1d0)))
-              (when (and task (task-activity task))
-                (setf (fluent-waiting-tasks fluent) (delete task (fluent-waiting-tasks fluent)))
-                (end-task-wait task fluent)))))))))
+                                    :timeout (and remaining (float remaining 1d0))))
+            (setf (fluent-waiting-tasks fluent)
+                  (delete *current-task* (fluent-waiting-tasks fluent)))))))))
 
 (defun wait-for (fluent &key timeout)
   "Block until the value of FLUENT is non-NIL and return that value. With

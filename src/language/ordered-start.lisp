@@ -18,45 +18,18 @@ most recent first."
   (changes 0 :type fixnum)   ; how often RUNNING changed
   (starters '()))
 
+(defun %activity-change (activity delta)
+  "ACTIVITY-CHANGE with ACTIVITY's lock held."
+  (setf (activity-changes activity) (logand (1+ (activity-changes activity)) most-positive-fixnum))
+  (when (zerop (incf (activity-running activity) delta))
+    (sb-thread:condition-broadcast (activity-quiet activity))))
+
 (defun activity-change (activity delta)
   "Count DELTA more running tasks in ACTIVITY (NIL: none is counted); tell the starters when
 none runs."
   (when activity
     (sb-thread:with-mutex ((activity-lock activity))
-      (setf (activity-changes activity) (logand (1+ (activity-changes activity)) most-positive-fixnum))
-      (when (zerop (incf (activity-running activity) delta))
-        (sb-thread:condition-broadcast (activity-quiet activity))))))
-
-;;; A task that waits is not counted as running. Its waker counts it again before going on
-;;; (a child that ends wakes its parent waiting for the children's decision, a pulse wakes the
-;;; tasks waiting on the fluent), so that the plan never looks quiet between the two. Each of
-;;; these runs under the lock of what is waited on (the task group's, the fluent's).
-
-(defun begin-task-wait (task on)
-  "TASK (a task or NIL) begins to wait on ON (a task group or a fluent)."
-  (when (and task (task-activity task))
-    (setf (task-waiting task) on)
-    (activity-change (task-activity task) -1)))
-
-(defun wake-waiting-task (task on)
-  "Count TASK as running again when it waits on ON (and is not counted yet)."
-  (when (and task (eq (task-waiting task) on))
-    (setf (task-waiting task) nil)
-    (activity-change (task-activity task) 1)))
-
-(defun end-task-wait (task on)
-  "TASK's wait on ON ended: counted as running again, unless its waker did that."
-  (wake-waiting-task task on))
-
-(defmacro with-task-waiting ((on) &body body)
-  "Run BODY, a wait of the current task on ON (any object) that no fluent or task group
-expresses (a projection clock's, say), with the task not counted as running: under
-*ORDERED-CONCURRENCY* its siblings may start meanwhile."
-  (let ((task (gensym "TASK")) (what (gensym "ON")))
-    `(let ((,task *current-task*) (,what ,on))
-       (begin-task-wait ,task ,what)
-       (unwind-protect (progn ,@body)
-         (end-task-wait ,task ,what)))))
+      (%activity-change activity delta))))
 
 (defun task-depth (task)
   "How many tasks TASK lies below its plan's top-level task."
@@ -82,7 +55,8 @@ happening in the plan. No wait without *ORDERED-CONCURRENCY*."
              (seen -1))
         (sb-thread:with-mutex ((activity-lock activity))
           (push task (activity-starters activity))
-          (decf (activity-running activity))
+          ;; as any wait: the plan may now be quiet for a starter further in
+          (%activity-change activity -1)
           (unwind-protect
                (loop until (and (<= (activity-running activity) 0)
                                 (eq (next-starter activity) task))
@@ -95,4 +69,4 @@ happening in the plan. No wait without *ORDERED-CONCURRENCY*."
                           (sb-thread:condition-wait (activity-quiet activity) (activity-lock activity)
                                                     :timeout (/ (- deadline now) 1000000d0))))
             (setf (activity-starters activity) (remove task (activity-starters activity) :count 1))
-            (incf (activity-running activity))))))))
+            (%activity-change activity 1)))))))

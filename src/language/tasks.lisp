@@ -59,6 +59,35 @@ other way than on a fluent (polling, say) must not hold the others forever.")
       "One of :CREATED, :RUNNING, :SUCCEEDED, :FAILED, :EVAPORATED."
       (documentation 'task-parent 'function) "The task that started this one, NIL for a top-level task.")
 
+;;; Under *ORDERED-CONCURRENCY* (ordered-start.lisp) a task that waits is not counted as
+;;; running. Its waker counts it again before going on (a child that ends wakes its parent
+;;; waiting for the children's decision, a pulse wakes the tasks waiting on the fluent), so that
+;;; the plan never looks quiet between the two. Each of these runs under the lock of what is
+;;; waited on (the task group's, the fluent's).
+
+(defun begin-task-wait (task on)
+  "TASK (a task or NIL) begins to wait on ON (a task group or a fluent)."
+  (when (and task (task-activity task))
+    (setf (task-waiting task) on)
+    (activity-change (task-activity task) -1)))
+
+(defun wake-waiting-task (task on)
+  "Count TASK as running again when it waits on ON (and is not counted yet)."
+  (when (and task (eq (task-waiting task) on))
+    (setf (task-waiting task) nil)
+    (activity-change (task-activity task) 1)))
+
+(defmacro with-task-waiting ((on) &body body)
+  "Run BODY, a wait of the current task on ON (any object: a task group, a fluent, a projection
+clock), with the task not counted as running: under *ORDERED-CONCURRENCY* its siblings may
+start meanwhile."
+  (let ((task (gensym "TASK")) (what (gensym "ON")))
+    `(let ((,task *current-task*) (,what ,on))
+       (begin-task-wait ,task ,what)
+       (unwind-protect (progn ,@body)
+         ;; counted as running again, unless its waker did that
+         (wake-waiting-task ,task ,what)))))
+
 (defmethod print-object ((task task) stream)
   (print-unreadable-object (task stream :type t :identity t)
     (format stream "~a ~(~a~)" (task-name task) (task-status task))))
@@ -280,9 +309,8 @@ and all threads joined before this returns. Returns the decision."
                (loop
                  (let ((decision (funcall decide tasks)))
                    (when decision (return decision)))
-                 (begin-task-wait *current-task* group)
-                 (unwind-protect (sb-thread:condition-wait (task-group-condition group) lock)
-                   (end-task-wait *current-task* group))))))
+                 (with-task-waiting (group)
+                   (sb-thread:condition-wait (task-group-condition group) lock))))))
       (evaporate-and-join group))))
 
 (defun resignal-failure (condition)
