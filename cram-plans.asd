@@ -199,6 +199,7 @@ points in polygons (package CRAM-MATH, CMA)."
   :components ((:file "package")
                (:file "metadata")
                (:file "grid")
+               (:file "samples")
                (:file "values")
                (:file "functions")
                (:file "belief")
@@ -552,7 +553,8 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :components ((:file "costmap-tests")
                (:file "costmap-kitchen-tests")
                (:file "costmap-api-tests")
-               (:file "costmap-fast-paths-tests")))
+               (:file "costmap-fast-paths-tests")
+               (:file "costmap-sampling-tests")))
 
 (defsystem "cram-plans/tests/bad-input"
   :description "The table-driven bad-input suite of every layer a user touches."

@@ -243,8 +243,10 @@ and a flat object held from below (a spoon) drops the difference when it is let 
 
 (defun object-regraspable-at-p (object pose)
   "True when OBJECT (an object designator of the belief state, held by the robot), let go at
-POSE (map) and come to rest below it (RESTING-POSE), can be grasped by the robot from where it stands, with any arm and any grasp
-a later fetch may use (REGRASP-GRASPS; CHECK-PICKING-UP-COLLISIONS), and is seen from there
+POSE (map) and come to rest below it (RESTING-POSE), can be grasped by the robot from where it
+stands, with any arm and any grasp a later fetch may use (REGRASP-GRASPS), with the pre-checks'
+coarse base offsets and torso heights as the fetch's choice of a base pose checks it
+\(CHECK-PICKING-UP-COLLISIONS :ANY :COARSE, OBJECT-GRASPABLE-FROM-P), and is seen from there
 \(OBJECT-VISIBLE-FROM-P: the fetch perceives it again before it grasps it). Checked in the
 belief state (CALL-WITH-OBJECT-LET-GO-AT)."
   (call-with-object-let-go-at
@@ -252,7 +254,7 @@ belief state (CALL-WITH-OBJECT-LET-GO-AT)."
    (lambda (o)
      (declare (ignore o))
      (and (handler-case (progn (check-picking-up-collisions object :grasps (regrasp-grasps object)
-                                                                   :any t)
+                                                                   :any :coarse)
                                t)
             ((or common-fail:object-unreachable pp-plans:pick-place-error) () nil))
           (object-visible-from-p object (btr:pose (btr:get-robot-object)))))))

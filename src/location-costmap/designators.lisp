@@ -156,7 +156,23 @@ belief state."
                                          (cl-transforms:origin base)
                                          (diagonal-covariance (* reach *reach-gauss-share*)))
                                 'reachable-from-weighted 4)
+        (let ((yaw (held-object-yaw-from designator base)))
+          (when yaw
+            (register-orientation-ordering costmap (make-preferred-yaw-ordering yaw))))
         costmap))))
+
+(defun held-object-yaw-from (designator base)
+  "When the FOR object of DESIGNATOR is held by the robot: the yaw (map) it has when the robot,
+standing at BASE (a map pose), turns it no more than it is turned in hand now, else NIL. Its
+places come in that orientation first (an object held by its side goes down from where the
+robot stands without turning the wrist)."
+  (let* ((for (desig:desig-prop-value designator :for))
+         (item (and (typep for 'desig:object-designator) (object-designator-world-object for)))
+         (robot (btr:get-robot-object)))
+    (when (and item robot (btr:object-attached robot item))
+      (+ (cl-transforms:get-yaw (cl-transforms:orientation base))
+         (- (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose item)))
+            (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose robot))))))))
 
 (defun supporting-items (x-min y-min x-max y-max top exclude &optional (world btr:*current-bullet-world*))
   "Bounding rectangles (x0 y0 x1 y1) of the items standing on the surface, except EXCLUDE."

@@ -206,6 +206,24 @@ an object to be put down on a surface may stand turned as its grasp and the robo
           append (mapcar (lambda (q) (cl-transforms:q* turn q))
                          (or previous (list (cl-transforms:make-identity-rotation)))))))
 
+(defun yaw-distance (a b)
+  "The angle (radians, 0 to pi) between the yaws A and B."
+  (let ((d (mod (- a b) (* 2 pi))))
+    (min d (- (* 2 pi) d))))
+
+(defun make-preferred-yaw-ordering (yaw)
+  "An orientation ordering (REGISTER-ORIENTATION-ORDERING) that puts the orientations whose
+yaw is nearest to YAW (radians, map) first; those equally near keep their order."
+  (unless (finite-real-p yaw)
+    (error "MAKE-PREFERRED-YAW-ORDERING: the yaw is ~s, expected a finite real (radians)." yaw))
+  (let ((yaw (float yaw 1d0)))
+    (lambda (x y orientations)
+      (declare (ignore x y))
+      (stable-sort (copy-list orientations) #'<
+                   :key (lambda (q)
+                          ;; quarter turns give yaws equal up to rounding: their order stays
+                          (round (yaw-distance (cl-transforms:get-yaw q) yaw) 1d-9))))))
+
 (defun make-constant-height-function (height)
   "A height generator giving HEIGHT (metres) everywhere."
   (unless (and (realp height) (not (and (floatp height) (sb-ext:float-nan-p height))) (< (abs height) 1d6))

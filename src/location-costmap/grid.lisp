@@ -99,24 +99,35 @@ database or the current robot change (METADATA-FROM-FACTS-P)."
                    :documentation "NIL, or a function (costmap window row-0 row-1 col-0 col-1)
 that multiplies the cells of the costmap in rows ROW-0..ROW-1 and columns COL-0..COL-1 (end
 exclusive) by the function's values at their centres; WINDOW holds those cells only, the cell
-\(row column) at (- row row-0) (- column col-0)."))
+\(row column) at (- row row-0) (- column col-0).")
+   (cell-test :initarg :cell-test :initform nil :reader cost-function-cell-test
+              :documentation "NIL, or for a function whose values are 0 and 1 only a function
+\(costmap row column) true where its value at the cell is 1: samples are drawn without the
+function and a drawn cell where it is 0 is drawn again (DRAW-SAMPLE-CELL)."))
   (:metaclass sb-mop:funcallable-standard-class)
   (:documentation "A cost function (x y) -> non-negative real that may know where it is zero
 (its bounds) and how to fill a whole grid quickly.  Plain functions (x y) work as well."))
 
-(defun make-cost-function (function &key name bounds grid-evaluator)
+(defun make-cost-function (function &key name bounds grid-evaluator cell-test)
   "A COST-FUNCTION calling FUNCTION (x y); BOUNDS (x-min y-min x-max y-max) tells where it can
 be non-zero, GRID-EVALUATOR (costmap window row-0 row-1 col-0 col-1) multiplies the block of
 cells rows ROW-0..ROW-1, columns COL-0..COL-1 (end exclusive), which WINDOW holds with the
 cell (row column) at (- row row-0) (- column col-0), by the function's values (a cell that is
-0 may be left alone)."
+0 may be left alone). CELL-TEST (costmap row column), for a FUNCTION whose values are 0 and
+1 only, is true where its value at the cell is 1, as the grid evaluator finds it: samples are
+then drawn without FUNCTION and tested at the cells drawn, so that FUNCTION is evaluated only
+there (the samples follow the same distribution)."
   (unless (functionp function)
     (error "MAKE-COST-FUNCTION: expected a function of (x y), got ~s." function))
   (when bounds
     (unless (and (listp bounds) (= (length bounds) 4) (every #'realp bounds))
       (error "MAKE-COST-FUNCTION: bounds ~s, expected (x-min y-min x-max y-max)." bounds)))
+  (when cell-test
+    (unless (functionp cell-test)
+      (error "MAKE-COST-FUNCTION: cell test ~s, expected a function (costmap row column)."
+             cell-test)))
   (let ((f (make-instance 'cost-function :name name :bounds bounds
-                                         :grid-evaluator grid-evaluator)))
+                                         :grid-evaluator grid-evaluator :cell-test cell-test)))
     (sb-mop:set-funcallable-instance-function f function)
     f))
 
@@ -140,9 +151,20 @@ cell (row column) at (- row row-0) (- column col-0), by the function's values (a
                    :documentation "Entries (name function score), applied by ascending score.")
    (orientation-generators :initform '() :initarg :orientation-generators
                            :accessor orientation-generators)
+   (orientation-orderings :initform '() :accessor orientation-orderings
+                          :documentation "Functions (x y orientations) that put the orientations
+the generators made in another order (REGISTER-ORIENTATION-ORDERING).")
    (height-generators :initform '() :initarg :height-generators :accessor height-generators)
    (window :initform nil :accessor %window
            :documentation "NIL, or the values of the cells of REGION (COST-WINDOW).")
+   (sampling-window :initform nil :accessor %sampling-window
+                    :documentation "NIL, or the values of the cells of REGION without the cost
+functions that samples test (SAMPLING-WINDOW).")
+   (sampling-distribution :initform nil :accessor %sampling-distribution
+                          :documentation "NIL, or the distribution samples are drawn from.")
+   (exact-sampling :initform nil :accessor %exact-sampling
+                   :documentation "True once samples are drawn from COST-WINDOW's values, as
+when too many drawn cells failed their tests in a row (DRAW-SAMPLE-CELL).")
    (matrix :initform nil :accessor %matrix
            :documentation "NIL, or the values of all cells (COST-GRID), made when asked for.")
    (total :initform nil :accessor %total
@@ -245,7 +267,9 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
 
 (defun invalidate-costmap (costmap)
   (setf (%window costmap) nil (%matrix costmap) nil (%total costmap) nil
-        (%distribution costmap) nil (%region costmap) nil (%normalized costmap) nil)
+        (%distribution costmap) nil (%region costmap) nil (%normalized costmap) nil
+        (%sampling-window costmap) nil (%sampling-distribution costmap) nil
+        (%exact-sampling costmap) nil)
   costmap)
 
 (defgeneric costmap-generator-name->score (name)
@@ -280,6 +304,16 @@ first is given the identity rotation)."
   (setf (orientation-generators costmap) (append (orientation-generators costmap) (list generator)))
   costmap)
 
+(defun register-orientation-ordering (costmap ordering)
+  "Add ORDERING, a function (x y orientations) returning the same ORIENTATIONS (a list of
+quaternions) in the order the samples at (X Y) should come in, to COSTMAP. Orderings run after
+all orientation generators, in registration order: a costmap merged with others orders the
+orientations that all of them made (e.g. the quarter turns of a place on a surface, best first
+for the robot that puts an object down there)."
+  (check-cost-function ordering "REGISTER-ORIENTATION-ORDERING")
+  (setf (orientation-orderings costmap) (append (orientation-orderings costmap) (list ordering)))
+  costmap)
+
 (defun register-height-generator (costmap generator)
   "Add GENERATOR, a function (x y) returning a list of heights (z in metres), to COSTMAP.  The
 first registered generator gives the heights of the samples (default: 0)."
@@ -312,6 +346,7 @@ height generators of all of them."
             (loop for (name fn score) in (cost-functions c)
                   do (register-cost-function merged fn name score))
             (dolist (g (orientation-generators c)) (register-orientation-generator merged g))
+            (dolist (o (orientation-orderings c)) (register-orientation-ordering merged o))
             (dolist (g (height-generators c)) (register-height-generator merged g)))))))
 
 ;;; ---- computing the grid -----------------------------------------------------------------------
@@ -369,6 +404,49 @@ exclusive), which WINDOW holds from cell (R0 C0) on, by FUNCTION (x y) at their 
                               (check-cell-value costmap name v x y))
                             (setf (aref window wr wc) (* (aref window wr wc) v))))))))
 
+(defun sampling-test-p (entry)
+  "True when the cost function of ENTRY ((name function score)) has a cell test
+\(MAKE-COST-FUNCTION :CELL-TEST): samples test it at the cells drawn instead of the grid."
+  (let ((fn (second entry)))
+    (and (typep fn 'cost-function) (cost-function-cell-test fn) t)))
+
+(defun multiply-window (costmap window entries r0 r1 c0 c1)
+  "Multiply WINDOW (the costmap's cells rows R0..R1, columns C0..C1) by the cost functions of
+ENTRIES, in their order."
+  (when (and (< r0 r1) (< c0 c1))
+    (loop for (name fn) in entries
+          for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
+          do (if evaluator
+                 (funcall evaluator costmap window r0 r1 c0 c1)
+                 (multiply-by-function costmap window name fn r0 r1 c0 c1))))
+  window)
+
+(defun copy-window (window)
+  "A fresh copy of the double-float matrix WINDOW."
+  (declare (type (simple-array double-float (* *)) window))
+  (let ((copy (make-array (array-dimensions window) :element-type 'double-float)))
+    (replace (sb-ext:array-storage-vector copy) (sb-ext:array-storage-vector window))
+    copy))
+
+(defun sampling-window (costmap)
+  "(values window region) as COST-WINDOW, but without the cost functions that have a cell test
+\(their values are 0 or 1): what samples are drawn from before they are tested. The same as
+COST-WINDOW's when no function has one."
+  (if (notany #'sampling-test-p (cost-functions costmap))
+      (cost-window costmap)
+      (progn
+        (unless (%sampling-window costmap)
+          (multiple-value-bind (r0 r1 c0 c1)
+              (bounds->index-range costmap (costmap-support-bounds costmap))
+            (setf (%sampling-window costmap)
+                  (multiply-window costmap (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
+                                                       :element-type 'double-float
+                                                       :initial-element 1d0)
+                                   (remove-if #'sampling-test-p (cost-functions costmap))
+                                   r0 r1 c0 c1)
+                  (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))))
+        (values (%sampling-window costmap) (%region costmap)))))
+
 (defun cost-window (costmap)
   "(values window region): the values of COSTMAP in the cells of REGION (row-0 row-1 col-0
 col-1, end exclusive), outside which every value is 0: the cells where all cost functions
@@ -376,17 +454,21 @@ with bounds can be non-zero.  WINDOW is a (row-1 - row-0) x (col-1 - col-0) doub
 whose cell (0 0) is the costmap's cell (row-0 col-0), each the product of the cost functions
 at the cell's centre; computed once and kept until another function is registered."
   (unless (%window costmap)
-    (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
-      (let ((window (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
-                                :element-type 'double-float :initial-element 1d0)))
-        (when (and (< r0 r1) (< c0 c1))
-          (loop for (name fn) in (cost-functions costmap)
-                for evaluator = (and (typep fn 'cost-function) (cost-function-grid-evaluator fn))
-                do (if evaluator
-                       (funcall evaluator costmap window r0 r1 c0 c1)
-                       (multiply-by-function costmap window name fn r0 r1 c0 c1))))
-        (setf (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1))
-              (%window costmap) window))))
+    (let ((tested (remove-if-not #'sampling-test-p (cost-functions costmap))))
+      (if tested
+          ;; the functions with cell tests are 0 or 1: multiplied last, the products are the same
+          (multiple-value-bind (window region) (sampling-window costmap)
+            (destructuring-bind (r0 r1 c0 c1) region
+              (setf (%window costmap)
+                    (multiply-window costmap (copy-window window) tested r0 r1 c0 c1))))
+          (multiple-value-bind (r0 r1 c0 c1)
+              (bounds->index-range costmap (costmap-support-bounds costmap))
+            (setf (%window costmap)
+                  (multiply-window costmap (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
+                                                       :element-type 'double-float
+                                                       :initial-element 1d0)
+                                   (cost-functions costmap) r0 r1 c0 c1)
+                  (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))))))
   (values (%window costmap) (%region costmap)))
 
 (defun cost-grid (costmap)
@@ -403,118 +485,3 @@ the cells COST-WINDOW computes); made once and kept until another function is re
                   do (loop for c from c0 below c1
                            do (setf (aref m r c) (aref window (- r r0) (- c c0))))))
           (setf (%matrix costmap) m)))))
-
-;;; ---- sampling -------------------------------------------------------------------------------------
-
-(defstruct (distribution (:conc-name dist-))
-  (cells #() :type (simple-array fixnum (*)))
-  (cumulative #() :type (simple-array double-float (*)))
-  (total 0d0 :type double-float))
-
-(defun positive-cells (window)
-  "How many cells of WINDOW are above 0."
-  (declare (type (simple-array double-float (* *)) window) (optimize speed))
-  (let ((n 0))
-    (declare (type fixnum n))
-    (dotimes (i (array-total-size window) n)
-      (when (> (row-major-aref window i) 0d0) (incf n)))))
-
-(defun costmap-distribution (costmap)
-  (or (%distribution costmap)
-      (multiple-value-bind (window region) (cost-window costmap)
-        (let* ((cols (costmap-columns costmap))
-               (count (positive-cells window))
-               (cells (make-array count :element-type 'fixnum))
-               (cumulative (make-array count :element-type 'double-float))
-               (sum 0d0) (k 0))
-          (declare (type (simple-array double-float (* *)) window) (type double-float sum)
-                   (type fixnum k cols) (type (simple-array fixnum (*)) cells)
-                   (type (simple-array double-float (*)) cumulative))
-          (destructuring-bind (r0 r1 c0 c1) region
-            (declare (type fixnum r0 r1 c0 c1) (optimize speed))
-            (loop for r of-type fixnum from r0 below r1
-                  for wr of-type fixnum from 0
-                  do (loop for c of-type fixnum from c0 below c1
-                           for wc of-type fixnum from 0
-                           do (let ((v (aref window wr wc)))
-                                (when (> v 0d0)
-                                  (incf sum v)
-                                  (setf (aref cells k) (+ c (* r cols)) (aref cumulative k) sum)
-                                  (incf k))))))
-          (when (zerop count)
-            (error 'invalid-probability-distribution
-                   :costmap costmap
-                   :reason (format nil "every cell is 0 (cost functions: ~{~(~a~)~^, ~})."
-                                   (mapcar #'first (cost-functions costmap)))))
-          (setf (%distribution costmap)
-                (make-distribution :cells cells :cumulative cumulative :total sum))))))
-
-(defun draw-cell (distribution random-state)
-  "A row-major cell index drawn with probability proportional to its value."
-  (let* ((cumulative (dist-cumulative distribution))
-         (r (random (dist-total distribution) random-state))
-         (lo 0) (hi (1- (length cumulative))))
-    (declare (type fixnum lo hi) (type double-float r))
-    (loop while (< lo hi)
-          do (let ((mid (ash (+ lo hi) -1)))
-               (if (> (aref cumulative mid) r) (setf hi mid) (setf lo (1+ mid)))))
-    (aref (dist-cells distribution) lo)))
-
-(defun generate-heights (costmap x y)
-  "The heights of the samples at (X Y): those of the first height generator, else (0)."
-  (let ((g (first (height-generators costmap))))
-    (if g
-        (let ((zs (funcall g x y)))
-          (unless (and (listp zs) zs (every #'realp zs))
-            (error "The height generator ~s of ~s gave ~s at (~,3f ~,3f), expected a non-empty ~
-                    list of reals." g costmap zs x y))
-          zs)
-        (list 0d0))))
-
-(defun generate-orientations (costmap x y)
-  "The orientations of the samples at (X Y): each orientation generator transforms the list of
-the previous one, starting from the identity."
-  (let ((orientations (list (cl-transforms:make-identity-rotation))))
-    (dolist (g (orientation-generators costmap) orientations)
-      (setf orientations (funcall g x y orientations))
-      (unless (and (listp orientations) orientations
-                   (every (lambda (q) (typep q 'cl-transforms:quaternion)) orientations))
-        (error "The orientation generator ~s of ~s gave ~s at (~,3f ~,3f), expected a ~
-                non-empty list of quaternions." g costmap orientations x y)))))
-
-(defparameter *redraw-limit* 16
-  "How often a cell that was already sampled is redrawn before it may be used again.")
-
-(defun costmap-samples (costmap &key (frame-id "map") (jitter t))
-  "The infinite lazy list of pose-stamped samples of COSTMAP in FRAME-ID: positions drawn with
-probability proportional to the cell values (a cell already used is redrawn, up to
-*REDRAW-LIMIT* times), uniformly placed inside the cell when JITTER, one pose per height and
-orientation of the generators.  The random numbers come from the costmap's own random state,
-which MAKE-LOCATION-COSTMAP seeded from *COSTMAP-RANDOM-STATE*."
-  (let ((distribution (costmap-distribution costmap))
-        (random-state (costmap-random-state costmap))
-        (used (make-hash-table))
-        (pending '())
-        (cols (costmap-columns costmap))
-        (res (resolution costmap)))
-    (cut:make-lazy-list
-     (lambda ()
-       (loop
-         (when pending (return (values (pop pending) t)))
-         (let ((cell (draw-cell distribution random-state)))
-           (loop repeat *redraw-limit* while (gethash cell used)
-                 do (setf cell (draw-cell distribution random-state)))
-           (setf (gethash cell used) t)
-           (multiple-value-bind (row col) (floor cell cols)
-             (let* ((x (+ (cell-center-x costmap col)
-                          (if jitter (* res (- (random 1d0 random-state) 0.5d0)) 0d0)))
-                    (y (+ (cell-center-y costmap row)
-                          (if jitter (* res (- (random 1d0 random-state) 0.5d0)) 0d0)))
-                    (zs (generate-heights costmap x y))
-                    (orientations (generate-orientations costmap x y)))
-               (setf pending
-                     (loop for z in zs
-                           append (loop for q in orientations
-                                        collect (cl-transforms-stamped:make-pose-stamped
-                                                 frame-id 0d0
-                                                 (cl-transforms:make-3d-vector x y z) q))))))))))))

@@ -17,7 +17,8 @@
    #:no-cost-functions-registered #:gen-costmap-sample-point #:cost-functions
    #:height-generators #:orientation-generators
    #:costmap-samples #:register-cost-function #:register-height-generator
-   #:register-orientation-generator #:costmap-generator-name->score
+   #:register-orientation-generator #:register-orientation-ordering
+   #:make-preferred-yaw-ordering #:costmap-generator-name->score
    #:desig-costmap #:merge-costmaps
    ;; cost functions and generators
    #:make-gauss-cost-function #:make-range-cost-function

@@ -92,39 +92,55 @@ body would block the rays cast from where it is going to stand."
       (when (btr:object copy name)
         (btr:remove-object copy name)))))
 
-(defun sight-blocks (window stride)
-  "(values rows columns): the first rows and columns of the STRIDE x STRIDE blocks of WINDOW
-\(from its cell (0 0) on) that have a cell above 0, row by row."
-  (declare (type (simple-array double-float (* *)) window) (type fixnum stride) (optimize speed))
+(defun sight-blocks (window stride &optional (r0 0) (c0 0))
+  "(values rows columns): the first rows and columns (in WINDOW) of the STRIDE x STRIDE blocks
+of the grid that WINDOW holds from the grid's cell (R0 C0) on, with a cell of WINDOW above 0,
+row by row. The blocks start at the grid's rows and columns that are multiples of STRIDE (the
+first and last in WINDOW may be cut), so that every window of the grid has the same blocks."
+  (declare (type (simple-array double-float (* *)) window) (type fixnum stride r0 c0))
   (let ((rows '()) (columns '())
         (n-rows (array-dimension window 0)) (n-columns (array-dimension window 1)))
-    (loop for br of-type fixnum from 0 below n-rows by stride
-          do (loop for bc of-type fixnum from 0 below n-columns by stride
-                   when (loop for r of-type fixnum from br below (min n-rows (+ br stride))
-                                thereis (loop for c of-type fixnum from bc below (min n-columns (+ bc stride))
-                                                thereis (> (aref window r c) 0d0)))
-                     do (push br rows) (push bc columns)))
+    (loop with br of-type fixnum = 0
+          while (< br n-rows)
+          do (let ((r-end (min n-rows (- (* stride (1+ (floor (+ r0 br) stride))) r0))))
+               (loop with bc of-type fixnum = 0
+                     while (< bc n-columns)
+                     do (let ((c-end (min n-columns (- (* stride (1+ (floor (+ c0 bc) stride))) c0))))
+                          (when (loop for r of-type fixnum from br below r-end
+                                        thereis (loop for c of-type fixnum from bc below c-end
+                                                        thereis (> (aref window r c) 0d0)))
+                            (push br rows) (push bc columns))
+                          (setf bc c-end)))
+               (setf br r-end)))
     (values (coerce (nreverse rows) '(simple-array fixnum (*)))
             (coerce (nreverse columns) '(simple-array fixnum (*))))))
 
+(defun block-eye (costmap row column stride)
+  "(values x y): the map point at the centre of the STRIDE x STRIDE block of the costmap's grid
+\(blocks start at multiples of STRIDE) that holds the cell (ROW COLUMN)."
+  (values (cell-center-x costmap (+ (* stride (floor column stride)) (* 0.5d0 (1- stride))))
+          (cell-center-y costmap (+ (* stride (floor row stride)) (* 0.5d0 (1- stride))))))
+
 (defun sight-eyes (costmap rows columns r0 c0 stride height)
-  "The eyes (a flat double vector, 3 per block) at the centres of the blocks of the costmap's
-cells whose first rows and columns are ROWS and COLUMNS counted from cell (R0 C0), at HEIGHT."
+  "The eyes (a flat double vector, 3 per block) at the centres of the blocks (BLOCK-EYE) of
+the costmap's cells whose first rows and columns are ROWS and COLUMNS counted from cell (R0
+C0), at HEIGHT."
   (declare (type (simple-array fixnum (*)) rows columns) (type fixnum r0 c0 stride))
   (let* ((n (length rows))
          (eyes (make-array (* 3 n) :element-type 'double-float)))
     (dotimes (b n eyes)
-      (setf (aref eyes (* 3 b)) (cell-center-x costmap (+ (+ c0 (aref columns b)) (* 0.5d0 (1- stride))))
-            (aref eyes (+ 1 (* 3 b))) (cell-center-y costmap (+ (+ r0 (aref rows b)) (* 0.5d0 (1- stride))))
-            (aref eyes (+ 2 (* 3 b))) height))))
+      (multiple-value-bind (x y) (block-eye costmap (+ r0 (aref rows b)) (+ c0 (aref columns b)) stride)
+        (setf (aref eyes (* 3 b)) x
+              (aref eyes (+ 1 (* 3 b))) y
+              (aref eyes (+ 2 (* 3 b))) height)))))
 
 (defun clear-blocks-out-of-sight (costmap window r0 c0 stride height world goals handle)
-  "Set to 0 the STRIDE x STRIDE blocks of WINDOW (the costmap's cells from (R0 C0) on) that
-have a cell above 0 and from whose centre, at HEIGHT, too few of GOALS are seen
-\(ENOUGH-POINTS-SEEN-P).  The rays go to one goal at a time, from the blocks whose verdict is
-still open."
+  "Set to 0 the STRIDE x STRIDE blocks of WINDOW (the costmap's cells from (R0 C0) on; blocks
+as SIGHT-BLOCKS makes them) that have a cell above 0 and from whose centre, at HEIGHT, too few
+of GOALS are seen \(ENOUGH-POINTS-SEEN-P).  The rays go to one goal at a time, from the blocks
+whose verdict is still open."
   (declare (type (simple-array double-float (* *)) window) (type fixnum r0 c0 stride))
-  (multiple-value-bind (rows columns) (sight-blocks window stride)
+  (multiple-value-bind (rows columns) (sight-blocks window stride r0 c0)
     (declare (type (simple-array fixnum (*)) rows columns))
     (let* ((n (length rows))
            (eyes (sight-eyes costmap rows columns r0 c0 stride height))
@@ -151,8 +167,10 @@ still open."
       (dotimes (b n)
         (when (< (aref seen b) need)
           (let ((br (aref rows b)) (bc (aref columns b)))
-            (loop for r of-type fixnum from br below (min n-rows (+ br stride))
-                  do (loop for c of-type fixnum from bc below (min n-columns (+ bc stride))
+            (loop for r of-type fixnum from br
+                    below (min n-rows (- (* stride (1+ (floor (+ r0 br) stride))) r0))
+                  do (loop for c of-type fixnum from bc
+                             below (min n-columns (- (* stride (1+ (floor (+ c0 bc) stride))) c0))
                            do (setf (aref window r c) 0d0)))))))))
 
 (defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
@@ -163,7 +181,8 @@ still open."
 to POINTS (3D points; default TARGET alone; ENOUGH-POINTS-SEEN-P) reach them (or
 TARGET-OBJECT) unobstructed in WORLD, else 0; the objects named IGNORE-OBJECTS (e.g. the
 robot) do not block.  On a grid it tests the centre of each STRIDE x STRIDE block of cells
-that are not zero yet, casting a ray to a point only while the block's verdict is open."
+that are not zero yet, casting a ray to a point only while the block's verdict is open; the
+samples of a costmap test only the blocks they are drawn in (a :CELL-TEST, MAKE-COST-FUNCTION)."
   (unless (typep stride '(integer 1 64))
     (error "MAKE-LINE-OF-SIGHT-COST-FUNCTION: stride ~s, expected an integer from 1 to 64." stride))
   (unless (and (realp camera-height) (< (abs camera-height) 1d3))
@@ -179,7 +198,17 @@ that are not zero yet, casting a ray to a point only while the block's verdict i
      :grid-evaluator
      (lambda (costmap window r0 r1 c0 c1)
        (declare (ignore r1 c1))
-       (clear-blocks-out-of-sight costmap window r0 c0 stride h world goals handle)))))
+       (clear-blocks-out-of-sight costmap window r0 c0 stride h world goals handle))
+     ;; samples test the blocks they are drawn in, each once
+     :cell-test
+     (let ((verdicts (make-hash-table :test 'equal)))
+       (lambda (costmap row column)
+         (multiple-value-bind (x y) (block-eye costmap row column stride)
+           (let ((key (cons x y)))
+             (multiple-value-bind (known found) (gethash key verdicts)
+               (if found
+                   known
+                   (setf (gethash key verdicts) (eye-sees-p world x y h goals handle)))))))))))
 
 (defun view-target-points (target target-object)
   "The points a line of sight must reach to see TARGET: TARGET itself, and for an object the

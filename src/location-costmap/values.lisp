@@ -131,7 +131,7 @@ random state."
                        sampling-function cell (costmap-columns costmap) (costmap-rows costmap)))
               (values (first cell) (second cell)))
             (multiple-value-bind (row column)
-                (floor (draw-cell (costmap-distribution costmap) random-state)
+                (floor (draw-sample-cell costmap random-state)
                        (costmap-columns costmap))
               (values column row)))
       (let* ((x (cell-center-x costmap column))
