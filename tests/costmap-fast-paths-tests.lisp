@@ -119,9 +119,10 @@ clear, every ray cast: the verdicts without the early stop."
   (in-kitchen
     (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
            (joint "sink_area_left_upper_drawer_main_joint")
-           (costmap::*occupancy-cache* '()))
+           (costmap::*occupancy-cache* '())
+           (costmap::*link-runs-cache* '()))
       (flet ((grid () (costmap:environment-occupancy-grid :padding 0.3))
-             (fresh () (let ((costmap::*occupancy-cache* '()))
+             (fresh () (let ((costmap::*occupancy-cache* '()) (costmap::*link-runs-cache* '()))
                          (costmap:environment-occupancy-grid :padding 0.3))))
         (let ((closed (grid)))
           (setf (btr:joint-state kitchen joint) 0.4d0)

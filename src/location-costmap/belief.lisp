@@ -28,20 +28,41 @@ paddings in each state.")
     (remove-if-not (lambda (o) (and (btr:robot-object-p o) (not (eq o robot))))
                    (btr:objects world))))
 
-(defun rasterise-box (bits origin-x origin-y resolution x0 y0 x1 y1 padding)
-  "Mark the cells of BITS whose centres are within PADDING of the rectangle [X0 X1] x [Y0 Y1].
-Each row's cells form one run: its ends are found by testing the cells near them, the cells
-between are marked without a test."
-  (declare (type (simple-array bit (* *)) bits) (type double-float origin-x origin-y resolution
+(declaim (inline cell-index))
+(defun cell-index (v)
+  "FLOOR of the double V, a cell index (far outside a grid's cells is clamped later)."
+  (declare (type double-float v))
+  (values (floor (max -1d9 (min 1d9 v)))))
+
+(defun apply-runs (bits runs)
+  "Mark the cells of the runs RUNS (a fixnum vector of row, first and last column triples) in
+the bit matrix BITS."
+  (declare (type (simple-array bit (* *)) bits) (type (simple-array fixnum (*)) runs)
+           (optimize speed))
+  (let ((cols (array-dimension bits 1))
+        (flat (sb-ext:array-storage-vector bits)))
+    (declare (type simple-bit-vector flat))
+    (loop for k of-type fixnum from 0 below (length runs) by 3
+          do (let ((start (+ (* (aref runs k) cols) (aref runs (+ k 1)))))
+               (fill flat 1 :start start
+                            :end (+ start (- (aref runs (+ k 2)) (aref runs (+ k 1))) 1))))
+    bits))
+
+(defun box-runs (rows cols origin-x origin-y resolution x0 y0 x1 y1 padding)
+  "The runs (a fixnum vector of row, first and last column triples) of the cells of a grid of
+ROWS x COLS cells (cell (0 0) at ORIGIN) whose centres are within PADDING of the rectangle
+[X0 X1] x [Y0 Y1]. Each row's cells form one run: its ends are found by testing the cells near
+them, the cells between are taken without a test."
+  (declare (type fixnum rows cols) (type double-float origin-x origin-y resolution
                                                       x0 y0 x1 y1 padding)
            (optimize speed))
-  (let* ((rows (array-dimension bits 0)) (cols (array-dimension bits 1))
-         (c0 (max 0 (floor (- x0 padding origin-x) resolution)))
-         (c1 (min (1- cols) (floor (- (+ x1 padding) origin-x) resolution)))
-         (r0 (max 0 (floor (- y0 padding origin-y) resolution)))
-         (r1 (min (1- rows) (floor (- (+ y1 padding) origin-y) resolution)))
-         (p2 (* padding padding)))
-    (declare (type fixnum rows cols c0 c1 r0 r1) (type double-float p2))
+  (let* ((c0 (max 0 (cell-index (/ (- x0 padding origin-x) resolution))))
+         (c1 (min (1- cols) (cell-index (/ (- (+ x1 padding) origin-x) resolution))))
+         (r0 (max 0 (cell-index (/ (- y0 padding origin-y) resolution))))
+         (r1 (min (1- rows) (cell-index (/ (- (+ y1 padding) origin-y) resolution))))
+         (p2 (* padding padding))
+         (runs '()))
+    (declare (type fixnum c0 c1 r0 r1) (type double-float p2))
     (when (<= c0 c1)
       (loop for r of-type fixnum from r0 to r1
             for y of-type double-float = (+ origin-y (* (+ r 0.5d0) resolution))
@@ -57,14 +78,22 @@ between are marked without a test."
                    ;; the run's ends as the cell arithmetic puts them, then moved to where the
                    ;; test itself says (the run is contiguous: the distance grows away from it)
                    (let* ((reach (sqrt (max 0d0 (- p2 dy2))))
-                          (a (max c0 (min (1+ c1) (the fixnum (ceiling (- (/ (- x0 reach origin-x) resolution) 0.5d0))))))
-                          (b (min c1 (max (1- c0) (the fixnum (floor (- (/ (- (+ x1 reach) origin-x) resolution) 0.5d0)))))))
+                          (a (max c0 (min (1+ c1) (- (cell-index (- 0.5d0 (/ (- x0 reach origin-x) resolution)))))))
+                          (b (min c1 (max (1- c0) (cell-index (- (/ (- (+ x1 reach) origin-x) resolution) 0.5d0))))))
                      (declare (type fixnum a b))
                      (loop while (and (> a c0) (inside (1- a))) do (decf a))
                      (loop while (and (<= a c1) (not (inside a))) do (incf a))
                      (loop while (and (< b c1) (inside (1+ b))) do (incf b))
                      (loop while (and (>= b a) (not (inside b))) do (decf b))
-                     (loop for c of-type fixnum from a to b do (setf (aref bits r c) 1))))))))
+                     (when (<= a b) (push r runs) (push a runs) (push b runs))))))
+    (coerce (nreverse runs) '(simple-array fixnum (*)))))
+
+(defun rasterise-box (bits origin-x origin-y resolution x0 y0 x1 y1 padding)
+  "Mark the cells of BITS whose centres are within PADDING of the rectangle [X0 X1] x [Y0 Y1]
+\(BOX-RUNS)."
+  (declare (type (simple-array bit (* *)) bits))
+  (apply-runs bits (box-runs (array-dimension bits 0) (array-dimension bits 1)
+                             origin-x origin-y resolution x0 y0 x1 y1 padding)))
 
 (defun convex-hull-2d (points)
   "The convex hull of POINTS ((x y) ...), counter-clockwise, without repeated corners."
@@ -142,23 +171,23 @@ past the edges). For a link along the map's axes, its box in the map, as before.
                :bounds (list (cl-transforms:x lo) (cl-transforms:y lo)
                              (cl-transforms:x hi) (cl-transforms:y hi)))))))))
 
-(defun rasterise-polygon (bits origin-x origin-y resolution corners padding)
-  "Mark the cells of BITS whose centres are within PADDING of the convex polygon CORNERS
-\((x y) ..., counter-clockwise)."
-  (declare (type (simple-array bit (* *)) bits) (type double-float origin-x origin-y resolution
-                                                      padding))
+(defun polygon-runs (rows cols origin-x origin-y resolution corners padding)
+  "The runs (as BOX-RUNS) of the cells of a grid of ROWS x COLS cells (cell (0 0) at ORIGIN)
+whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., counter-clockwise)."
+  (declare (type fixnum rows cols) (type double-float origin-x origin-y resolution padding))
   (let* ((n (length corners))
          (ax (make-array n :element-type 'double-float))
          (ay (make-array n :element-type 'double-float))
          (ex (make-array n :element-type 'double-float))
          (ey (make-array n :element-type 'double-float))
-         (xs (mapcar #'first corners)) (ys (mapcar #'second corners))
-         (rows (array-dimension bits 0)) (cols (array-dimension bits 1))
-         (c0 (max 0 (floor (- (reduce #'min xs) padding origin-x) resolution)))
-         (c1 (min (1- cols) (floor (- (+ (reduce #'max xs) padding) origin-x) resolution)))
-         (r0 (max 0 (floor (- (reduce #'min ys) padding origin-y) resolution)))
-         (r1 (min (1- rows) (floor (- (+ (reduce #'max ys) padding) origin-y) resolution)))
-         (p2 (* padding padding)))
+         (xs (mapcar (lambda (c) (float (first c) 1d0)) corners))
+         (ys (mapcar (lambda (c) (float (second c) 1d0)) corners))
+         (c0 (max 0 (cell-index (/ (- (reduce #'min xs) padding origin-x) resolution))))
+         (c1 (min (1- cols) (cell-index (/ (- (+ (reduce #'max xs) padding) origin-x) resolution))))
+         (r0 (max 0 (cell-index (/ (- (reduce #'min ys) padding origin-y) resolution))))
+         (r1 (min (1- rows) (cell-index (/ (- (+ (reduce #'max ys) padding) origin-y) resolution))))
+         (p2 (* padding padding))
+         (runs '()))
     (loop for (a . rest) on corners
           for b = (or (first rest) (first corners))
           for i from 0
@@ -180,10 +209,95 @@ past the edges). For a link along the map's axes, its box in the map, as before.
                    (setf best (min best (+ (* qx qx) (* qy qy)))))))))
       (loop for r from r0 to r1
             for y double-float = (+ origin-y (* (+ r 0.5d0) resolution))
-            do (loop for c from c0 to c1
-                     for x double-float = (+ origin-x (* (+ c 0.5d0) resolution))
-                     when (and (zerop (aref bits r c)) (near-p x y))
-                       do (setf (aref bits r c) 1))))))
+            do (let ((start nil))
+                 (loop for c from c0 to (1+ c1)
+                       for near = (and (<= c c1)
+                                       (near-p (+ origin-x (* (+ c 0.5d0) resolution)) y))
+                       do (cond ((and near (null start)) (setf start c))
+                                ((and (not near) start)
+                                 (push r runs) (push start runs) (push (1- c) runs)
+                                 (setf start nil)))))))
+    (coerce (nreverse runs) '(simple-array fixnum (*)))))
+
+(defun rasterise-polygon (bits origin-x origin-y resolution corners padding)
+  "Mark the cells of BITS whose centres are within PADDING of the convex polygon CORNERS
+\((x y) ..., counter-clockwise; POLYGON-RUNS)."
+  (declare (type (simple-array bit (* *)) bits))
+  (apply-runs bits (polygon-runs (array-dimension bits 0) (array-dimension bits 1)
+                                 origin-x origin-y resolution corners padding)))
+
+(defvar *link-runs-cache* '()
+  "The runs of the links of recently rasterised environments (ENVIRONMENT-OCCUPANCY-GRID): a
+list of (key . links), the most recently used first. KEY: the environment object, its URDF and
+the grid's geometry, padding and heights; LINKS: a vector with per link index NIL or (pose .
+runs), the link's map pose (7 doubles) when its runs were found.")
+
+(defparameter *link-runs-cache-size* 8
+  "How many environments and grid geometries *LINK-RUNS-CACHE* keeps (a household run asks for
+two paddings of one kitchen).")
+
+(defun link-runs-entry (key link-count)
+  "The link vector of *LINK-RUNS-CACHE* under KEY (made empty when there is none), moved to the
+front."
+  (let ((entry (assoc key *link-runs-cache* :test #'equal)))
+    (if entry
+        (unless (eq entry (first *link-runs-cache*))
+          (setf *link-runs-cache* (cons entry (remove entry *link-runs-cache* :test #'eq))))
+        (progn (setf entry (cons key (make-array link-count :initial-element nil)))
+               (push entry *link-runs-cache*)
+               (when (> (length *link-runs-cache*) *link-runs-cache-size*)
+                 (setf *link-runs-cache* (subseq *link-runs-cache* 0 *link-runs-cache-size*)))))
+    (cdr entry)))
+
+(defun same-pose-p (poses index pose)
+  "True when the 7 doubles of link INDEX in POSES (ROBOT-LINK-POSES) are those of POSE."
+  (declare (type (simple-array double-float (*)) poses pose) (type fixnum index))
+  (loop for k of-type fixnum from 0 below 7
+        always (= (aref poses (+ (* 7 index) k)) (aref pose k))))
+
+(defun link-runs (env index name aabbs rows cols origin-x origin-y resolution padding z-min z-max)
+  "The runs of the cells that link INDEX (named NAME) of ENV occupies, within PADDING of the
+outline of its own box as it stands (LINK-FOOTPRINT), or none when its box (in AABBS, 6 per
+link) lies outside Z-MIN .. Z-MAX or is flat."
+  (declare (type (simple-array double-float (*)) aabbs))
+  (let ((k (* 6 index)))
+    (if (and (> (- (aref aabbs (+ k 3)) (aref aabbs k)) 1d-6)
+             (> (- (aref aabbs (+ k 4)) (aref aabbs (+ k 1))) 1d-6)
+             (> (aref aabbs (+ k 5)) z-min)
+             (< (aref aabbs (+ k 2)) z-max))
+        ;; the link's own box turned as it stands (a table turned by a few degrees would block
+        ;; a larger box around it)
+        (let ((corners (link-footprint env index name)))
+          (if (and (>= (length corners) 3)
+                   (not (axis-aligned-p corners (* 0.25d0 resolution))))
+              (polygon-runs rows cols origin-x origin-y resolution corners padding)
+              (box-runs rows cols origin-x origin-y resolution
+                        (aref aabbs k) (aref aabbs (+ k 1)) (aref aabbs (+ k 3)) (aref aabbs (+ k 4))
+                        padding)))
+        (make-array 0 :element-type 'fixnum))))
+
+(defun rasterise-environment (bits env key origin-x origin-y resolution padding z-min z-max)
+  "Mark in BITS the cells the links of ENV occupy (LINK-RUNS); the runs of a link that has not
+moved since the last grid of the same KEY (*LINK-RUNS-CACHE*) are not found again."
+  (let* ((handle (btr:object-handle env))
+         (world (btr::whandle env))
+         (poses (cram-native:robot-link-poses world handle))
+         (names (btr:link-names env))
+         (links (link-runs-entry key (length names)))
+         (aabbs nil)
+         (rows (array-dimension bits 0)) (cols (array-dimension bits 1)))
+    (loop for name in names
+          for i from 0
+          for known = (aref links i)
+          do (apply-runs
+              bits
+              (if (and known (same-pose-p poses i (car known)))
+                  (cdr known)
+                  (let ((runs (link-runs env i name (or aabbs (setf aabbs (btr:link-aabbs env)))
+                                         rows cols origin-x origin-y resolution padding
+                                         (float z-min 1d0) (float z-max 1d0))))
+                    (setf (aref links i) (cons (subseq poses (* 7 i) (* 7 (1+ i))) runs))
+                    runs))))))
 
 (defun environment-occupancy-grid (&key (world btr:*current-bullet-world*) (padding 0d0)
                                         width height origin-x origin-y resolution
@@ -216,23 +330,8 @@ metadata.  Grids are cached per environment pose and joint state."
         (let* ((grid (make-occupancy-grid width height origin-x origin-y resolution))
                (bits (occupancy-bits grid)))
           (dolist (env environments)
-            (loop for name in (btr:link-names env)
-                  for i from 0
-                  do (multiple-value-bind (lo hi) (btr:aabb env i)
-                       (when (and (> (- (cl-transforms:x hi) (cl-transforms:x lo)) 1d-6)
-                                  (> (- (cl-transforms:y hi) (cl-transforms:y lo)) 1d-6)
-                                  (> (cl-transforms:z hi) z-min)
-                                  (< (cl-transforms:z lo) z-max))
-                         ;; the link's own box turned as it stands (a table turned by a few
-                         ;; degrees would block a larger box around it)
-                         (let ((corners (link-footprint env i name)))
-                           (if (and (>= (length corners) 3)
-                                    (not (axis-aligned-p corners (* 0.25d0 resolution))))
-                               (rasterise-polygon bits origin-x origin-y resolution corners padding)
-                               (rasterise-box bits origin-x origin-y resolution
-                                              (cl-transforms:x lo) (cl-transforms:y lo)
-                                              (cl-transforms:x hi) (cl-transforms:y hi)
-                                              padding)))))))
+            (rasterise-environment bits env (list* env (btr:urdf env) (subseq key 0 8))
+                                   origin-x origin-y resolution padding z-min z-max))
           (push (cons key grid) *occupancy-cache*)
           (when (> (length *occupancy-cache*) *occupancy-cache-size*)
             (setf *occupancy-cache* (subseq *occupancy-cache* 0 *occupancy-cache-size*)))
