@@ -495,7 +495,24 @@ sink behind it; either way the held object ends where it was, attached to the sa
       (is (null (fd-plans::find-placing-sample (constantly t) (target) 3
                                                :score (constantly 0) :best 1 :require-best t)))
       (is (null (fd-plans::find-placing-sample (constantly nil) (target) 3
-                                               :score score :best 1))))))
+                                               :score score :best 1)))
+      ;; the final test: asked only of a sample its score would let be taken, with the same
+      ;; answers as a predicate that asks it of every sample
+      (let ((asked '()))
+        (flet ((final (d) (push (x-of d) asked) (/= (x-of d) 1.5))
+               (x-list (d) (x-of d)))
+          (is (= 1.0 (x-list (fd-plans::find-placing-sample (constantly t) (target) 3
+                                                            :score score :best 1 :final #'final))))
+          (is (equal '(1d0 1.5d0 0.5d0) asked) "each sample could still be taken: ~s" asked)
+          (setf asked '())
+          (is (= 0.5 (x-list (fd-plans::find-placing-sample (constantly t) (target) 3
+                                                            :score (constantly 0) :best 1
+                                                            :final #'final))))
+          (is (equal '(0.5d0) asked) "after the first, no sample scores higher: ~s" asked)
+          (setf asked '())
+          (is (= 1.0 (x-list (fd-plans::find-placing-sample (lambda (d) (/= (x-of d) 0.5))
+                                                            (target) 3 :final #'final))))
+          (is (equal '(1d0 1.5d0) asked) "without a score, each that passes the predicate"))))))
 
 (test an-object-is-put-down-leaving-room-for-the-objects-that-follow
   ;; a cup will go within 6 cm of the island's origin: the bottle put down there, or 5 cm

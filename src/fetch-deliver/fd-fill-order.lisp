@@ -79,23 +79,29 @@ of the robot's base where it stands."
 *PLACES-TO-LEAVE* room: NAVIGATE first looks for a base pose with such a sample, and only when
 there is none for one with the best sample there is.")
 
-(defun find-placing-sample (predicate target count &key score best require-best)
+(defun find-placing-sample (predicate target count &key score best require-best final)
   "The first of up to COUNT solutions of the location designator TARGET (each a designator of
-its equation chain), drawn one at a time in the costmap's order, that satisfies PREDICATE, or
-NIL. With SCORE (a function of a solution, a number), the first one that satisfies PREDICATE
-and scores BEST, else (unless REQUIRE-BEST) the first with the highest score among all COUNT
-solutions. Second value: the first with the highest score even under REQUIRE-BEST (NIL: none
-satisfied PREDICATE)."
+its equation chain), drawn one at a time in the costmap's order, that satisfies PREDICATE and
+FINAL (NIL: none), or NIL. With SCORE (a function of a solution, a number), the first one that
+satisfies them and scores BEST, else (unless REQUIRE-BEST) the first with the highest score
+among all COUNT solutions. Second value: the first with the highest score even under
+REQUIRE-BEST (NIL: none satisfied them). FINAL, the dearer part of the test, is asked only of a
+solution that satisfies PREDICATE and would be taken by its score, so that a solution that
+could not beat the one found is not tested further."
   (let ((found nil) (found-score nil))
-    (loop repeat count
-          for current = target then (desig:next-solution current)
-          while current
-          when (funcall predicate current)
-            do (if (null score)
-                   (return-from find-placing-sample current)
-                   (let ((s (funcall score current)))
-                     (when (and best (>= s best))
+    (flet ((final-p (current) (or (null final) (funcall final current))))
+      (loop repeat count
+            for current = target then (desig:next-solution current)
+            while current
+            when (funcall predicate current)
+              do (if (null score)
+                     (when (final-p current)
                        (return-from find-placing-sample current))
-                     (when (or (null found-score) (> s found-score))
-                       (setf found current found-score s)))))
+                     (let ((s (funcall score current)))
+                       (when (and (or (null found-score) (> s found-score)
+                                      (and best (>= s best)))
+                                  (final-p current))
+                         (when (and best (>= s best))
+                           (return-from find-placing-sample current))
+                         (setf found current found-score s))))))
     (values (and (not require-best) found) found)))

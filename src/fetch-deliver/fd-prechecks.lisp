@@ -116,9 +116,12 @@ object can be grasped again there)."
            (and (pp-plans::with-object-being-placed (object candidate)
                   (trajectory-reachable-p arm trajectory '(:reaching :putting :retracting)))
                 (object-fits-at-p object candidate)
-                (or (not regrasp)
-                    (object-regraspable-at-p
-                     object (pp-plans:pose-in-map (desig:reference candidate)))))))))
+                (or (not regrasp) (regraspable-at-candidate-p object candidate)))))))
+
+(defun regraspable-at-candidate-p (object candidate)
+  "True when OBJECT, put down at the current solution of the location designator CANDIDATE,
+can be grasped again from where the robot stands (OBJECT-REGRASPABLE-AT-P)."
+  (object-regraspable-at-p object (pp-plans:pose-in-map (desig:reference candidate))))
 
 (defvar *placing-fallback* nil
   "NIL, or a cons whose car CHECK-PLACING-COLLISIONS sets when it finds no sample that leaves
@@ -142,8 +145,11 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
           (return-from check-placing-collisions (values candidate t)))))
     (multiple-value-bind (found best)
         (find-placing-sample (lambda (candidate)
-                               (placeable-at-p object arm candidate regrasp))
+                               (placeable-at-p object arm candidate nil))
                              target *placing-check-samples*
+                             ;; the dearest test last, and only of a sample that could be taken
+                             :final (and regrasp (lambda (candidate)
+                                                   (regraspable-at-candidate-p object candidate)))
                              :score (and *places-to-leave*
                                          (lambda (candidate)
                                            (room-left object candidate)))
