@@ -157,6 +157,46 @@ digits) left out."
           "the table moved ~,3f m" (cl-transforms:v-dist before after))))
   (btw-tut:init-projection))
 
+(test a-varied-kitchen-is-the-parse-of-its-text
+  ;; the varied kitchen is copied from the parse of the kitchen's text with the footprints
+  ;; moved: the same model as a parse of the varied text
+  (let* ((original (uiop:read-file-string
+                    (asdf:system-relative-pathname "cram-plans" "resources/iai_kitchen.urdf")))
+         (base (cl-urdf:parse-urdf original)))
+    (multiple-value-bind (text origins)
+        (demos::vary-urdf-text original (sb-ext:seed-random-state 5))
+      (let ((copy (cl-urdf:robot-with-joint-origins base origins :source text))
+            (parsed (cl-urdf:parse-urdf text)))
+        (is (= (length demos::*varied-footprints*) (length origins)))
+        (is (string= text (cl-urdf:source copy)))
+        (is (string= (cl-urdf:name (cl-urdf:root-link parsed)) (cl-urdf:name (cl-urdf:root-link copy))))
+        (flet ((joint-view (j)
+                 (list (cl-urdf:joint-type j) (cl-urdf:name (cl-urdf:parent j))
+                       (cl-urdf:name (cl-urdf:child j)) (cl-urdf:origin j) (cl-urdf:axis j)
+                       (cl-urdf:limits j) (cl-urdf:mimic j)))
+               (link-view (l)
+                 (list (and (cl-urdf:parent-joint l) (cl-urdf:name (cl-urdf:parent-joint l)))
+                       (mapcar #'cl-urdf:name (cl-urdf:child-joints l))
+                       (cl-urdf:collision l) (cl-urdf:visual l))))
+          (let ((differing (loop for name being the hash-keys of (cl-urdf:joints parsed)
+                                   using (hash-value j)
+                                 for c = (gethash name (cl-urdf:joints copy))
+                                 unless (and c (equal (joint-view j) (joint-view c)))
+                                   collect name)))
+            (is (null differing) "joints that differ from the parse: ~s" differing))
+          (let ((differing (loop for name being the hash-keys of (cl-urdf:links parsed)
+                                   using (hash-value l)
+                                 for c = (gethash name (cl-urdf:links copy))
+                                 unless (and c (equal (link-view l) (link-view c)))
+                                   collect name)))
+            (is (null differing) "links that differ from the parse: ~s" differing)))
+        ;; the footprints moved, the original is untouched
+        (dolist (entry origins)
+          (is (not (equal (cdr entry) (cl-urdf:origin (gethash (car entry) (cl-urdf:joints base))))))
+          (is (eq (cl-urdf:parent-joint (cl-urdf:child (gethash (car entry) (cl-urdf:joints base))))
+                  (gethash (car entry) (cl-urdf:joints base)))))))
+    (signals cl-urdf:urdf-error (cl-urdf:robot-with-joint-origins base '(("no_such_joint" . nil))))))
+
 (defun split-log-entries (log)
   "LOG's entries: the text from one \"[(\" at the start of a line to the next."
   (let ((starts (loop for i = 0 then (1+ p) for p = (search (format nil "~%[(") log :start2 i)

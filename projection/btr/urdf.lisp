@@ -112,11 +112,15 @@ magnitude. Errors name STRING as written in the URDF."
           (- (* cr cp sy) (* sr sp cy))
           (+ (* cr cp cy) (* sr sp sy)))))
 
+(defun text-origin (xyz rpy what)
+  "The origin ((x y z) (qx qy qz qw)) of an <origin> element whose xyz and rpy attributes are
+the texts XYZ and RPY (WHAT names its element in errors), as PARSE-URDF reads it."
+  (list (numbers xyz (format nil "~a origin xyz" what) 3 *max-coordinate*)
+        (apply #'rpy->quaternion (numbers rpy (format nil "~a origin rpy" what) 3))))
+
 (defun parse-origin (element what)
   (if element
-      (list (numbers (attr element "xyz" "0 0 0") (format nil "~a origin xyz" what) 3 *max-coordinate*)
-            (apply #'rpy->quaternion
-                   (numbers (attr element "rpy" "0 0 0") (format nil "~a origin rpy" what) 3)))
+      (text-origin (attr element "xyz" "0 0 0") (attr element "rpy" "0 0 0") what)
       (list (list 0d0 0d0 0d0) (list 0d0 0d0 0d0 1d0))))
 
 (defun parse-geometry (element what)
@@ -341,3 +345,36 @@ a new link J_reversed, plus a fixed joint J_reversed_offset with the inverse ori
                            (dom:append-child offset (apply #'element "origin" (origin-attributes inverse)))
                            (dom:append-child root offset))))))))))
       (dom:map-document (cxml:make-string-sink) doc))))
+
+(defun robot-with-joint-origins (robot origins &key (source (source robot)))
+  "A copy of the parsed ROBOT with fresh links and joints (their geometry, axes and limits
+shared) whose joints named in ORIGINS, an alist of joint name -> origin ((x y z) (qx qy qz qw),
+as TEXT-ORIGIN gives it), have those origins, and whose source text is SOURCE: what PARSE-URDF
+gives for ROBOT's text with those <origin> elements changed, without parsing the text again."
+  (dolist (entry origins)
+    (unless (and (consp entry) (gethash (car entry) (joints robot)))
+      (urdf-fail "ROBOT-WITH-JOINT-ORIGINS: ~s, expected (joint-name . origin) for a joint of ~s"
+                 entry (name robot))))
+  (let ((links (make-hash-table :test 'equal))
+        (joints (make-hash-table :test 'equal)))
+    (maphash (lambda (link-name l)
+               (setf (gethash link-name links)
+                     (make-instance 'link :name link-name :collision (collision l) :visual (visual l))))
+             (links robot))
+    (maphash (lambda (joint-name j)
+               (let ((copy (make-instance 'joint
+                                          :name joint-name :type (joint-type j)
+                                          :parent (gethash (name (parent j)) links)
+                                          :child (gethash (name (child j)) links)
+                                          :origin (let ((new (assoc joint-name origins :test #'string=)))
+                                                    (if new (cdr new) (origin j)))
+                                          :axis (axis j) :limits (limits j) :mimic (mimic j))))
+                 (setf (gethash joint-name joints) copy
+                       (parent-joint (child copy)) copy)))
+             (joints robot))
+    (maphash (lambda (link-name l)
+               (setf (child-joints (gethash link-name links))
+                     (mapcar (lambda (j) (gethash (name j) joints)) (child-joints l))))
+             (links robot))
+    (make-instance 'robot :name (name robot) :links links :joints joints
+                          :root-link (gethash (name (root-link robot)) links) :source source)))
