@@ -428,6 +428,15 @@ ENTRIES, in their order."
     (replace (sb-ext:array-storage-vector copy) (sb-ext:array-storage-vector window))
     copy))
 
+(defun fresh-window (costmap entries)
+  "The window of the cells where all of COSTMAP's cost functions with bounds can be non-zero
+\(its region, now kept in the costmap), each the product of the cost functions of ENTRIES."
+  (multiple-value-bind (r0 r1 c0 c1) (bounds->index-range costmap (costmap-support-bounds costmap))
+    (setf (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))
+    (multiply-window costmap (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
+                                         :element-type 'double-float :initial-element 1d0)
+                     entries r0 r1 c0 c1)))
+
 (defun sampling-window (costmap)
   "(values window region) as COST-WINDOW, but without the cost functions that have a cell test
 \(their values are 0 or 1): what samples are drawn from before they are tested. The same as
@@ -436,15 +445,8 @@ COST-WINDOW's when no function has one."
       (cost-window costmap)
       (progn
         (unless (%sampling-window costmap)
-          (multiple-value-bind (r0 r1 c0 c1)
-              (bounds->index-range costmap (costmap-support-bounds costmap))
-            (setf (%sampling-window costmap)
-                  (multiply-window costmap (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
-                                                       :element-type 'double-float
-                                                       :initial-element 1d0)
-                                   (remove-if #'sampling-test-p (cost-functions costmap))
-                                   r0 r1 c0 c1)
-                  (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))))
+          (setf (%sampling-window costmap)
+                (fresh-window costmap (remove-if #'sampling-test-p (cost-functions costmap)))))
         (values (%sampling-window costmap) (%region costmap)))))
 
 (defun cost-window (costmap)
@@ -455,20 +457,14 @@ whose cell (0 0) is the costmap's cell (row-0 col-0), each the product of the co
 at the cell's centre; computed once and kept until another function is registered."
   (unless (%window costmap)
     (let ((tested (remove-if-not #'sampling-test-p (cost-functions costmap))))
-      (if tested
-          ;; the functions with cell tests are 0 or 1: multiplied last, the products are the same
-          (multiple-value-bind (window region) (sampling-window costmap)
-            (destructuring-bind (r0 r1 c0 c1) region
-              (setf (%window costmap)
-                    (multiply-window costmap (copy-window window) tested r0 r1 c0 c1))))
-          (multiple-value-bind (r0 r1 c0 c1)
-              (bounds->index-range costmap (costmap-support-bounds costmap))
-            (setf (%window costmap)
-                  (multiply-window costmap (make-array (list (max 0 (- r1 r0)) (max 0 (- c1 c0)))
-                                                       :element-type 'double-float
-                                                       :initial-element 1d0)
-                                   (cost-functions costmap) r0 r1 c0 c1)
-                  (%region costmap) (list r0 (max r0 r1) c0 (max c0 c1)))))))
+      (setf (%window costmap)
+            (if tested
+                ;; the functions with cell tests are 0 or 1: multiplied last, the products are
+                ;; the same
+                (multiple-value-bind (window region) (sampling-window costmap)
+                  (destructuring-bind (r0 r1 c0 c1) region
+                    (multiply-window costmap (copy-window window) tested r0 r1 c0 c1)))
+                (fresh-window costmap (cost-functions costmap))))))
   (values (%window costmap) (%region costmap)))
 
 (defun cost-grid (costmap)
