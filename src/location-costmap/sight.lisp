@@ -199,9 +199,10 @@ samples of a costmap test only the blocks they are drawn in (a :CELL-TEST, MAKE-
      (lambda (costmap window r0 r1 c0 c1)
        (declare (ignore r1 c1))
        (clear-blocks-out-of-sight costmap window r0 c0 stride h world goals handle))
-     ;; samples test the blocks they are drawn in, each once
+     ;; samples test the blocks they are drawn in, each once (the costmaps merged from this
+     ;; one, which other threads may sample, share the verdicts)
      :cell-test
-     (let ((verdicts (make-hash-table :test 'equal)))
+     (let ((verdicts (make-hash-table :test 'equal :synchronized t)))
        (lambda (costmap row column)
          (multiple-value-bind (x y) (block-eye costmap row column stride)
            (let ((key (cons x y)))

@@ -43,22 +43,27 @@
 (defun support-height-below (x y z &key (ignore '()))
   "The highest top (z) of an environment link or item below height Z whose bounding box covers
 (X, Y), or NIL."
-  (let ((best nil))
+  (let ((x (float x 1d0)) (y (float y 1d0)) (limit (+ (float z 1d0) 1d-3)) (best nil))
+    (declare (type double-float x y limit))
     (flet ((consider (x0 y0 x1 y1 top)
-             (when (and (<= x0 x x1) (<= y0 y y1) (<= top (+ z 1d-3)))
-               (setf best (max (or best most-negative-double-float) top)))))
+             (declare (type double-float x0 y0 x1 y1 top))
+             (when (and (<= x0 x x1) (<= y0 y y1) (<= top limit) (or (null best) (> top best)))
+               (setf best top))))
+      (declare (inline consider))
       (let* ((env (btr:get-environment-object))
              (boxes (and env (ignore-errors (btr:link-aabbs env)))))
         (when boxes
-          (dotimes (i (length (btr:link-names env)))
-            (let ((k (* 6 i)))
-              (consider (aref boxes k) (aref boxes (+ k 1))
-                        (aref boxes (+ k 3)) (aref boxes (+ k 4)) (aref boxes (+ k 5)))))))
+          (let ((boxes boxes))
+            (declare (type (simple-array double-float (*)) boxes))
+            (loop for k of-type fixnum from 0 below (* 6 (floor (length boxes) 6)) by 6
+                  do (consider (aref boxes k) (aref boxes (+ k 1))
+                               (aref boxes (+ k 3)) (aref boxes (+ k 4)) (aref boxes (+ k 5)))))))
       (dolist (o (btr:objects))
         (when (and (typep o 'btr:item) (not (member (btr:name o) ignore)))
           (multiple-value-bind (lo hi) (btr:aabb o)
-            (consider (cl-transforms:x lo) (cl-transforms:y lo)
-                      (cl-transforms:x hi) (cl-transforms:y hi) (cl-transforms:z hi))))))
+            (consider (float (cl-transforms:x lo) 1d0) (float (cl-transforms:y lo) 1d0)
+                      (float (cl-transforms:x hi) 1d0) (float (cl-transforms:y hi) 1d0)
+                      (float (cl-transforms:z hi) 1d0))))))
     best))
 
 ;;; ---- picking up --------------------------------------------------------------------------------
