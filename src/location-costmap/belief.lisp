@@ -17,6 +17,22 @@
 cells): a household run opens and closes a dozen drawers and doors and asks for grids of two
 paddings in each state.")
 
+(defun recent-entry (symbol key test)
+  "The entry (key . value) under KEY (compared with TEST) of the list of recently used entries
+in the special variable SYMBOL, moved to its front; NIL when there is none."
+  (let ((entry (assoc key (symbol-value symbol) :test test)))
+    (when (and entry (not (eq entry (first (symbol-value symbol)))))
+      (setf (symbol-value symbol) (cons entry (remove entry (symbol-value symbol) :test #'eq))))
+    entry))
+
+(defun add-recent-entry (symbol key value size)
+  "Put (KEY . VALUE) at the front of the list of recently used entries in the special variable
+SYMBOL, keeping at most SIZE entries. Returns VALUE."
+  (push (cons key value) (symbol-value symbol))
+  (when (> (length (symbol-value symbol)) size)
+    (setf (symbol-value symbol) (subseq (symbol-value symbol) 0 size)))
+  value)
+
 (defun vector-key (pose)
   (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
     (list (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
@@ -239,15 +255,11 @@ two paddings of one kitchen).")
 (defun link-runs-entry (key link-count)
   "The link vector of *LINK-RUNS-CACHE* under KEY (made empty when there is none), moved to the
 front."
-  (let ((entry (assoc key *link-runs-cache* :test #'equal)))
+  (let ((entry (recent-entry '*link-runs-cache* key #'equal)))
     (if entry
-        (unless (eq entry (first *link-runs-cache*))
-          (setf *link-runs-cache* (cons entry (remove entry *link-runs-cache* :test #'eq))))
-        (progn (setf entry (cons key (make-array link-count :initial-element nil)))
-               (push entry *link-runs-cache*)
-               (when (> (length *link-runs-cache*) *link-runs-cache-size*)
-                 (setf *link-runs-cache* (subseq *link-runs-cache* 0 *link-runs-cache-size*)))))
-    (cdr entry)))
+        (cdr entry)
+        (add-recent-entry '*link-runs-cache* key (make-array link-count :initial-element nil)
+                          *link-runs-cache-size*))))
 
 (defun same-pose-p (poses index pose)
   "True when the 7 doubles of link INDEX in POSES (ROBOT-LINK-POSES) are those of POSE."
@@ -318,24 +330,20 @@ metadata.  Grids are cached per environment pose and joint state."
                                    from 0 to 100 metres." padding))
                          (coerce padding 'double-float)))
          (environments (static-obstacles world))
-         (key (list* width height origin-x origin-y resolution padding z-min z-max
-                     (mapcar (lambda (e) (list (btr:name e) (btr:urdf e) (vector-key (btr:pose e))
-                                               (mapcar #'cdr (btr:joint-states e))))
-                             environments)))
-         (cached (assoc key *occupancy-cache* :test #'equalp)))
+         (geometry (list width height origin-x origin-y resolution padding z-min z-max))
+         (key (append geometry
+                      (mapcar (lambda (e) (list (btr:name e) (btr:urdf e) (vector-key (btr:pose e))
+                                                (mapcar #'cdr (btr:joint-states e))))
+                              environments)))
+         (cached (recent-entry '*occupancy-cache* key #'equalp)))
     (if cached
-        (progn (unless (eq cached (first *occupancy-cache*))
-                 (setf *occupancy-cache* (cons cached (remove cached *occupancy-cache* :test #'eq))))
-               (cdr cached))
+        (cdr cached)
         (let* ((grid (make-occupancy-grid width height origin-x origin-y resolution))
                (bits (occupancy-bits grid)))
           (dolist (env environments)
-            (rasterise-environment bits env (list* env (btr:urdf env) (subseq key 0 8))
+            (rasterise-environment bits env (list* env (btr:urdf env) geometry)
                                    origin-x origin-y resolution padding z-min z-max))
-          (push (cons key grid) *occupancy-cache*)
-          (when (> (length *occupancy-cache*) *occupancy-cache-size*)
-            (setf *occupancy-cache* (subseq *occupancy-cache* 0 *occupancy-cache-size*)))
-          grid))))
+          (add-recent-entry '*occupancy-cache* key grid *occupancy-cache-size*)))))
 
 ;;; ---- robot base poses in collision -------------------------------------------------------------------
 

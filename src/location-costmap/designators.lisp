@@ -161,18 +161,25 @@ belief state."
             (register-orientation-ordering costmap (make-preferred-yaw-ordering yaw))))
         costmap))))
 
+(defun held-item (designator key)
+  "The object of the belief state that the value of KEY in DESIGNATOR (an object designator)
+stands for, when the robot holds it; else NIL."
+  (let ((object (desig:desig-prop-value designator key))
+        (robot (btr:get-robot-object)))
+    (and robot (typep object 'desig:object-designator)
+         (let ((item (object-designator-world-object object)))
+           (and item (btr:object-attached robot item) item)))))
+
 (defun held-object-yaw-from (designator base)
   "When the FOR object of DESIGNATOR is held by the robot: the yaw (map) it has when the robot,
 standing at BASE (a map pose), turns it no more than it is turned in hand now, else NIL. Its
 places come in that orientation first (an object held by its side goes down from where the
 robot stands without turning the wrist)."
-  (let* ((for (desig:desig-prop-value designator :for))
-         (item (and (typep for 'desig:object-designator) (object-designator-world-object for)))
-         (robot (btr:get-robot-object)))
-    (when (and item robot (btr:object-attached robot item))
+  (let ((item (held-item designator :for)))
+    (when item
       (+ (cl-transforms:get-yaw (cl-transforms:orientation base))
          (- (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose item)))
-            (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose robot))))))))
+            (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose (btr:get-robot-object)))))))))
 
 (defun supporting-items (x-min y-min x-max y-max top exclude &optional (world btr:*current-bullet-world*))
   "Bounding rectangles (x0 y0 x1 y1) of the items standing on the surface, except EXCLUDE."

@@ -206,11 +206,6 @@ an object to be put down on a surface may stand turned as its grasp and the robo
           append (mapcar (lambda (q) (cl-transforms:q* turn q))
                          (or previous (list (cl-transforms:make-identity-rotation)))))))
 
-(defun yaw-distance (a b)
-  "The angle (radians, 0 to pi) between the yaws A and B."
-  (let ((d (mod (- a b) (* 2 pi))))
-    (min d (- (* 2 pi) d))))
-
 (defun make-preferred-yaw-ordering (yaw)
   "An orientation ordering (REGISTER-ORIENTATION-ORDERING) that puts the orientations whose
 yaw is nearest to YAW (radians, map) first; those equally near keep their order."
@@ -222,7 +217,9 @@ yaw is nearest to YAW (radians, map) first; those equally near keep their order.
       (stable-sort (copy-list orientations) #'<
                    :key (lambda (q)
                           ;; quarter turns give yaws equal up to rounding: their order stays
-                          (round (yaw-distance (cl-transforms:get-yaw q) yaw) 1d-9))))))
+                          (round (abs (cl-transforms:normalize-angle
+                                       (- (cl-transforms:get-yaw q) yaw)))
+                                 1d-9))))))
 
 (defun make-constant-height-function (height)
   "A height generator giving HEIGHT (metres) everywhere."

@@ -128,11 +128,7 @@ may be (e.g. #'KITCHEN-RESTRICTED-AREA, which the household scenario sets).")
 
 (defun restricted-area-applies-p (designator)
   "True when *RESTRICTED-AREA-FUNCTION* is set and DESIGNATOR's object is not on the robot."
-  (and *restricted-area-function*
-       (let* ((object (desig:desig-prop-value designator :object))
-              (item (and (typep object 'desig:object-designator) (object-designator-world-object object)))
-              (robot (btr:get-robot-object btr:*current-bullet-world*)))
-         (not (and item robot (btr:object-attached robot item))))))
+  (and *restricted-area-function* (not (held-item designator :object))))
 
 (defun restricted-area-costmap ()
   (let ((costmap (make-location-costmap)))

@@ -92,6 +92,14 @@ body would block the rays cast from where it is going to stand."
       (when (btr:object copy name)
         (btr:remove-object copy name)))))
 
+(declaim (inline block-end))
+(defun block-end (first start count stride)
+  "The end (exclusive, at most COUNT) in a window whose first row (or column) is the grid's
+FIRST of the STRIDE rows of the grid (blocks start at multiples of STRIDE) that hold the
+window's row START."
+  (declare (type fixnum first start count stride))
+  (min count (- (* stride (1+ (floor (+ first start) stride))) first)))
+
 (defun sight-blocks (window stride &optional (r0 0) (c0 0))
   "(values rows columns): the first rows and columns (in WINDOW) of the STRIDE x STRIDE blocks
 of the grid that WINDOW holds from the grid's cell (R0 C0) on, with a cell of WINDOW above 0,
@@ -102,10 +110,10 @@ first and last in WINDOW may be cut), so that every window of the grid has the s
         (n-rows (array-dimension window 0)) (n-columns (array-dimension window 1)))
     (loop with br of-type fixnum = 0
           while (< br n-rows)
-          do (let ((r-end (min n-rows (- (* stride (1+ (floor (+ r0 br) stride))) r0))))
+          do (let ((r-end (block-end r0 br n-rows stride)))
                (loop with bc of-type fixnum = 0
                      while (< bc n-columns)
-                     do (let ((c-end (min n-columns (- (* stride (1+ (floor (+ c0 bc) stride))) c0))))
+                     do (let ((c-end (block-end c0 bc n-columns stride)))
                           (when (loop for r of-type fixnum from br below r-end
                                         thereis (loop for c of-type fixnum from bc below c-end
                                                         thereis (> (aref window r c) 0d0)))
@@ -167,10 +175,8 @@ whose verdict is still open."
       (dotimes (b n)
         (when (< (aref seen b) need)
           (let ((br (aref rows b)) (bc (aref columns b)))
-            (loop for r of-type fixnum from br
-                    below (min n-rows (- (* stride (1+ (floor (+ r0 br) stride))) r0))
-                  do (loop for c of-type fixnum from bc
-                             below (min n-columns (- (* stride (1+ (floor (+ c0 bc) stride))) c0))
+            (loop for r of-type fixnum from br below (block-end r0 br n-rows stride)
+                  do (loop for c of-type fixnum from bc below (block-end c0 bc n-columns stride)
                            do (setf (aref window r c) 0d0)))))))))
 
 (defun make-line-of-sight-cost-function (target camera-height &key (world btr:*current-bullet-world*)
