@@ -102,3 +102,75 @@
                             (common-fail:manipulation-low-level-failure () t))))
         (is (eq t failed))
         (is (<= 1 solves 12) "~d IK solutions were tried for a hand inside the table" solves)))))
+
+(defun deepest-hand-contact (robot links)
+  "The smallest contact distance (metres, negative: into it) of ROBOT's LINKS with the kitchen."
+  (let ((world btr:*current-bullet-world*))
+    (loop for (nil la other nil d) in (cram-native:object-contacts (btr::world-handle world)
+                                                                   (btr:object-handle robot))
+          when (and (member (btr::link-name-of robot la) links :test #'string=)
+                    (eq (btr::object-by-handle world other) (btr:object world :iai-kitchen)))
+            minimize d)))
+
+(defun hand-sunk-goal (robot depth)
+  "A tool goal over the table (yaw -pi/2, as in the test above) lowered in 0.5 mm steps until
+the left hand's links reach at least DEPTH metres into the kitchen with the hand there
+\(reached with collisions allowed): the goal and how deep they reach."
+  (let ((links (urdf-proj::hand-links :left robot)))
+    (loop for z from 0.80d0 downto 0.70d0 by 0.0005d0
+          for goal = (ps "map" -2.0 -0.80 z (/ pi -2))
+          do (urdf-proj:with-simulated-robot
+               (urdf-proj:move-tcp goal nil :collision-mode :allow-all))
+             (let ((d (deepest-hand-contact robot links)))
+               (when (<= d (- depth))
+                 (return (values goal d)))))))
+
+(test a-tool-goal-whose-hand-sinks-beyond-what-the-ik-can-move-it-is-given-up-at-once
+  ;; A finger a few millimetres into the table: less than the fixed centimetre of old, more
+  ;; than another IK solution within the tolerances can move it.
+  (with-kitchen
+    (let ((robot (robot)))
+      (urdf-proj:with-simulated-robot
+        (urdf-proj:move-joints :park :park)
+        (urdf-proj:drive *grasp-base-pose*)
+        (urdf-proj:move-torso 0.3))
+      (let* ((chain (urdf-proj::arm-ik-chain :left robot))
+             (slacks (mapcar (lambda (l) (urdf-proj::goal-bound-slack robot chain l 0d0 0d0))
+                             (urdf-proj::goal-bound-links chain robot))))
+        ;; the tolerances' 1 mm plus 0.01 rad over the hand's reach from the wrist
+        (is (every (lambda (s) (< 0.0009d0 s 0.0045d0)) slacks) "slacks ~s" slacks))
+      (multiple-value-bind (goal depth) (hand-sunk-goal robot 0.006d0)
+        (is (not (null goal)))
+        (is (< -0.0095d0 depth) "the hand reaches ~,4f m into the table" depth)
+        (urdf-proj:with-simulated-robot (urdf-proj:move-joints :park :park))
+        (multiple-value-bind (solves failed)
+            (calls-during 'urdf-proj:solve-ik
+                          (lambda ()
+                            (handler-case (progn (urdf-proj:with-simulated-robot
+                                                   (urdf-proj:move-tcp goal nil))
+                                                 nil)
+                              (common-fail:manipulation-low-level-failure () t))))
+          (is (eq t failed))
+          (is (<= 1 solves 12) "~d IK solutions were tried for a hand ~,4f m inside the table"
+              solves depth))))))
+
+(test a-tool-goal-whose-hand-only-touches-the-world-is-searched-on
+  ;; Less deep than another IK solution may move the hand: other candidates are tried.
+  (with-kitchen
+    (let ((robot (robot)))
+      (urdf-proj:with-simulated-robot
+        (urdf-proj:move-joints :park :park)
+        (urdf-proj:drive *grasp-base-pose*)
+        (urdf-proj:move-torso 0.3))
+      (multiple-value-bind (goal depth) (hand-sunk-goal robot 0.0001d0)
+        (is (not (null goal)))
+        (is (< -0.001d0 depth) "the hand reaches ~,4f m into the table" depth)
+        (urdf-proj:with-simulated-robot (urdf-proj:move-joints :park :park))
+        (let ((solves (calls-during 'urdf-proj:solve-ik
+                                    (lambda ()
+                                      (ignore-errors
+                                       (handler-case (urdf-proj:with-simulated-robot
+                                                       (urdf-proj:move-tcp goal nil))
+                                         (common-fail:manipulation-low-level-failure () nil)))))))
+          (is (> solves 12) "only ~d IK solutions were tried for a hand touching the table"
+              solves))))))

@@ -168,36 +168,67 @@ again only when *BASE-OFFSETS* changed), or only (0 0) without MOVE-BASE. Not to
    (cl-transforms:transform* (cl-transforms:pose->transform tcp-map-pose)
                              (cl-transforms:transform-inv (tcp-in-ee-transform arm robot)))))
 
+(defparameter *goal-bound-penetration* 0.001d0
+  "Metres a link that the tool goal fixes must reach into the world, beyond what the IK can
+move it (GOAL-BOUND-SLACK), before MOVE-TCP gives the goal up at once: a margin for the
+contact distances' own error.")
+
+(defun goal-bound-slack (robot chain link position-error rotation-error)
+  "How far (metres) any point of ROBOT's LINK, fixed to the tip of CHAIN, may lie from where
+it is now in another IK solution of the same goal: the tip is now POSITION-ERROR metres and
+ROTATION-ERROR radians off the goal and another solution within the IK tolerances, so it moves
+by at most their sums, and a point at distance r from the tip (bounded by the corners of the
+link's bounding box) by the position's part plus r times the rotation's."
+  (let* ((tip (cl-transforms:origin (btr:link-pose robot (ik-chain-tip-link chain))))
+         (tx (float (cl-transforms:x tip) 1d0))
+         (ty (float (cl-transforms:y tip) 1d0))
+         (tz (float (cl-transforms:z tip) 1d0))
+         (box (cram-native:object-aabb (btr::whandle robot) (btr:object-handle robot)
+                                       (robot-link-index robot link)))
+         (r 0d0))
+    (declare (type double-float tx ty tz r) (type (simple-array double-float (*)) box))
+    (dotimes (k 8)
+      (let ((dx (- (aref box (if (logbitp 0 k) 3 0)) tx))
+            (dy (- (aref box (if (logbitp 1 k) 4 1)) ty))
+            (dz (- (aref box (if (logbitp 2 k) 5 2)) tz)))
+        (setf r (max r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))
+    (+ position-error *ik-position-tolerance*
+       (* r (+ rotation-error *ik-rotation-tolerance*)))))
+
 (defun goal-bound-links (chain robot)
   "The links of ROBOT that the goal of the IK CHAIN fixes in the map: its tip link and every
 link below it (the wrist, the hand, the fingers)."
   (link-descendants robot (ik-chain-tip-link chain)))
 
-(defparameter *goal-bound-penetration* 0.01d0
-  "Metres a link that the tool goal fixes must reach into the world before MOVE-TCP gives the
-goal up at once: more than the IK tolerances can move the hand (a touch may come and go with
-another IK solution).")
-
-(defun goal-bound-collision-p (chains robot)
-  "True when a link that the goals of CHAINS fix in the map (GOAL-BOUND-LINKS) reaches more
-than *GOAL-BOUND-PENETRATION* into anything but the robot, its attached objects, the floor and
-the contacts the motion is meant to make: no other base offset or torso value can free it, as
-the hand stays at its goal."
+(defun goal-bound-collision-p (chains robot &optional (position-error 0d0) (rotation-error 0d0))
+  "True when a link that the goals of CHAINS fix in the map (GOAL-BOUND-LINKS) reaches into
+anything but the robot, its attached objects, the floor and the contacts the motion is meant
+to make deeper than any other IK solution of the goals can move it (GOAL-BOUND-SLACK, from the
+current solution's POSITION-ERROR and ROTATION-ERROR, plus *GOAL-BOUND-PENETRATION*): no
+other base offset or torso value can free it, as the hand stays at its goal."
   (let* ((world (btr:world robot))
-         (links (loop for chain in chains append (goal-bound-links chain robot)))
+         (slack (make-hash-table :test 'equal))
          (except (multiple-value-bind (attached attached-objects planes)
                      (collision-excepts world robot)
                    (declare (ignore attached))
                    (append planes attached-objects)))
          (intended (intended-contacts robot)))
-    (loop for (a la b lb) in (btr::contact-records world robot except
-                                                   (- *goal-bound-penetration*))
-          for other = (if (eq a robot) b a)
-          for link = (if (eq a robot) la lb)
-          for other-link = (if (eq a robot) lb la)
-          thereis (and link (not (eq other robot))
-                       (member link links :test #'string=)
-                       (not (intended-contact-p intended robot link other other-link))))))
+    (dolist (chain chains)
+      (dolist (link (goal-bound-links chain robot))
+        (when (robot-link-index robot link)
+          (setf (gethash link slack)
+                (+ (goal-bound-slack robot chain link position-error rotation-error)
+                   *goal-bound-penetration*)))))
+    (loop for (nil la other-handle other-la distance)
+            in (cram-native:object-contacts (btr::world-handle world) (btr:object-handle robot)
+                                            :threshold 0d0
+                                            :except (mapcar #'btr:object-handle except))
+          for link = (btr::link-name-of robot la)
+          for bound = (and link (gethash link slack))
+          for other = (and bound (< distance (- bound)) (btr::object-by-handle world other-handle))
+          thereis (and other (not (eq other robot))
+                       (not (intended-contact-p intended robot link other
+                                                (btr::link-name-of other other-la)))))))
 
 (defun shoulder-positions (robot ee-goals torso torsos)
   "For each value of TORSOS (NIL: the torso as it is), a list with, per goal of EE-GOALS ((arm
@@ -320,10 +351,14 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
               (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset))
                     placed t))
             (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
-            (let ((solutions (loop for (nil pose chain ee first-child) in ee-goals
-                                   for q = (chain-ik-from-map chain ee first-child pose robot nil 8)
-                                   unless q do (return nil)
-                                   collect (mapcar #'list (coerce (ik-chain-joint-names chain) 'list) q))))
+            (let* ((position-error 0d0) (rotation-error 0d0)
+                   (solutions (loop for (nil pose chain ee first-child) in ee-goals
+                                    for (q pe re) = (multiple-value-list
+                                                     (chain-ik-from-map chain ee first-child pose robot nil 8))
+                                    unless q do (return nil)
+                                    do (setf position-error (max position-error pe)
+                                             rotation-error (max rotation-error re))
+                                    collect (mapcar #'list (coerce (ik-chain-joint-names chain) 'list) q))))
               (when (and solutions (= (length solutions) (length ee-goals)))
                 (btr:set-robot-state-from-joints (apply #'append solutions) robot)
                 (let ((clear (perform-collision-check collision-mode arms robot)))
@@ -338,7 +373,8 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                     (return-from search t))
                   (let ((hopeless (and (not clear) (not goal-checked)
                                        (setf goal-checked t)
-                                       (goal-bound-collision-p (mapcar #'third ee-goals) robot))))
+                                       (goal-bound-collision-p (mapcar #'third ee-goals) robot
+                                                               position-error rotation-error))))
                     (btr:set-robot-state-from-joints arms0 robot)
                     (when hopeless (return-from candidates)))))))))))
       (setf (btr:pose robot) base0)
