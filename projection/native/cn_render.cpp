@@ -158,6 +158,7 @@ struct Cull {
   double near_m = 0, right = 0, top = 0;
   int w = 0, h = 0;
   int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // pixel rectangle, inclusive
+  double far_m = INFINITY;  // depth beyond which nothing can cover the target's pixels
 };
 Cull g_cull;
 
@@ -168,18 +169,27 @@ bool culled(GLContext &c, const RenderItem &it, const btTransform &frame) {
   if (!g_cull.on) return false;
   const auto &b = mesh_bounds(c, *it.mesh);
   const btTransform t = g_cull.view * frame * it.local;
-  double px0 = 1e300, py0 = 1e300, px1 = -1e300, py1 = -1e300;
+  double px0 = 1e300, py0 = 1e300, px1 = -1e300, py1 = -1e300, nearest = INFINITY;
+  int behind = 0;
   for (int k = 0; k < 8; ++k) {
     btVector3 corner((k & 1 ? b.second : b.first).x() * it.scale.x(),
                      (k & 2 ? b.second : b.first).y() * it.scale.y(),
                      (k & 4 ? b.second : b.first).z() * it.scale.z());
     btVector3 pc = t * corner;
-    if (pc.z() > -g_cull.near_m) return false;  // reaches behind the near plane: draw it
+    nearest = std::min(nearest, -pc.z());
+    if (pc.z() > -g_cull.near_m) {  // behind the near plane: no pixel from this corner
+      ++behind;
+      continue;
+    }
     double x = (pc.x() * g_cull.near_m / -pc.z() / g_cull.right + 1) * 0.5 * g_cull.w;
     double y = (pc.y() * g_cull.near_m / -pc.z() / g_cull.top + 1) * 0.5 * g_cull.h;
     px0 = std::min(px0, x); px1 = std::max(px1, x);
     py0 = std::min(py0, y); py1 = std::max(py1, y);
   }
+  if (behind == 8) return true;   // wholly behind the near plane: nothing of it is drawn
+  // wholly behind the target's farthest point: it loses every depth test against the target
+  if (nearest > g_cull.far_m) return true;
+  if (behind > 0) return false;   // reaches across the near plane: draw it
   return px1 < g_cull.x0 - 1 || px0 > g_cull.x1 + 2 || py1 < g_cull.y0 - 1 || py0 > g_cull.y1 + 2;
 }
 
@@ -527,6 +537,19 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
       g_cull.w = cam.w;
       g_cull.h = cam.h;
       g_cull.x0 = x0; g_cull.y0 = y0; g_cull.x1 = x1; g_cull.y1 = y1;
+      {  // the target's farthest depth: a corner of its bounding box
+        btVector3 blo, bhi;
+        g_cull.far_m = INFINITY;
+        if (union_aabb(o, link, blo, bhi)) {
+          double far = 0;
+          for (int k = 0; k < 8; ++k) {
+            btVector3 corner(k & 1 ? bhi.x() : blo.x(), k & 2 ? bhi.y() : blo.y(),
+                             k & 4 ? bhi.z() : blo.z());
+            far = std::max(far, -(g_cull.view * corner).z());
+          }
+          g_cull.far_m = far;
+        }
+      }
       draw_world(c, w, SEG, -1, -1);
       g_cull.on = false;
       glDisable(GL_SCISSOR_TEST);

@@ -177,6 +177,23 @@ int main() {
   double frac;
   int occ[8];
   CHECK(cn_visibility(w, cam, CN_CAMERA_OPTICAL, 50, 64, 48, r, -1, &frac, occ, 8) >= 0 && frac > 0.5);
+  {  // what lies behind the camera or wholly behind the target is not drawn, and changes nothing
+    int v = cn_world_create(0, 0, -9.81);
+    double at[7] = {0, 0, 0.3, 0, 0, 0, 1};
+    int item = cn_body_add_box(v, at, 0.2, 0.2, 0.4, 0);
+    double f0, f1, f2;
+    int o0[8], o1[8], o2[8];
+    CHECK(cn_visibility(v, cam, CN_CAMERA_OPTICAL, 50, 64, 48, item, -1, &f0, o0, 8) == 0 && f0 > 0.9);
+    double behind_camera[7] = {-3, 0, 0.3, 0, 0, 0, 1}, behind_item[7] = {1, 0, 0.3, 0, 0, 0, 1};
+    cn_body_add_box(v, behind_camera, 0.5, 4, 4, 0);
+    cn_body_add_box(v, behind_item, 0.5, 4, 4, 0);
+    CHECK(cn_visibility(v, cam, CN_CAMERA_OPTICAL, 50, 64, 48, item, -1, &f1, o1, 8) == 0 && f1 == f0);
+    double in_front[7] = {-1, 0.1, 0.3, 0, 0, 0, 1};
+    int blocker = cn_body_add_box(v, in_front, 0.1, 0.1, 0.8, 0);
+    CHECK(cn_visibility(v, cam, CN_CAMERA_OPTICAL, 50, 64, 48, item, -1, &f2, o2, 8) == 1 &&
+          o2[0] == blocker && f2 < f0 - 0.1);
+    CHECK(cn_world_destroy(v) == 0);
+  }
   CHECK(cn_render(w, cam, 7, 50, 64, 48, 0.05, 20, rgb.data(), nullptr, nullptr) == CN_E_ARG);
   CHECK(cn_write_png("/nonexistent-dir/x.png", rgb.data(), 64, 48) == CN_E_FILE);
 
