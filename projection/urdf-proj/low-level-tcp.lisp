@@ -232,7 +232,7 @@ other base offset or torso value can free it, as the hand stays at its goal."
 
 (defun shoulder-positions (robot ee-goals torso torsos)
   "For each value of TORSOS (NIL: the torso as it is), a list with, per goal of EE-GOALS ((arm
-ee-pose chain end-effector first-child) ...), the map position (a 3-vector of doubles) of the
+ee-pose chain end-effector first-child seed) ...), the map position (a 3-vector of doubles) of the
 goal's FIRST-CHILD link with the joint TORSO at that value and the robot otherwise as it is,
 or NIL for a goal whose end effector is not its chain's tip (not filtered). Computed without
 changing the belief state."
@@ -300,19 +300,22 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
   (let* ((robot (robot-object))
          (arms (mapcar #'car goals))
          ;; (arm ee-pose chain end-effector-link first-joint-child) per goal: what ARM-IK looks up
+         ;; and, last, the IK seed: the arm's joints as they are, which every candidate starts
+         ;; from (a candidate that fails puts them back)
          (ee-goals (mapcar (lambda (g)
                              (let* ((arm (car g)) (chain (arm-ik-chain arm robot)))
                                (list arm (tcp->ee-pose arm (cdr g) robot) chain
-                                     (end-effector-link arm) (first-joint-child chain robot))))
+                                     (end-effector-link arm) (first-joint-child chain robot)
+                                     (map 'list (lambda (j) (btr:joint-state robot j))
+                                          (ik-chain-joint-names chain)))))
                            goals))
          (base0 (btr:pose robot))
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
          (state0 (btr:joint-states robot))
          ;; what a candidate changes besides the torso, which each candidate sets itself
-         (arms0 (loop for (nil nil chain) in ee-goals
-                      append (map 'list (lambda (j) (list j (btr:joint-state robot j)))
-                                  (ik-chain-joint-names chain))))
+         (arms0 (loop for (nil nil chain nil nil seed) in ee-goals
+                      append (map 'list #'list (ik-chain-joint-names chain) seed)))
          (sweep-start (and *sweep-check* (robot-state-vectors robot)))
          (goal-checked (not (member collision-mode '(nil :avoid-all))))
          (swept nil)
@@ -352,9 +355,9 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                     placed t))
             (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
             (let* ((position-error 0d0) (rotation-error 0d0)
-                   (solutions (loop for (nil pose chain ee first-child) in ee-goals
+                   (solutions (loop for (nil pose chain ee first-child seed) in ee-goals
                                     for (q pe re) = (multiple-value-list
-                                                     (chain-ik-from-map chain ee first-child pose robot nil 8))
+                                                     (chain-ik-from-map chain ee first-child pose robot seed 8))
                                     unless q do (return nil)
                                     do (setf position-error (max position-error pe)
                                              rotation-error (max rotation-error re))

@@ -26,16 +26,26 @@ environment starts with a fresh one, so that a run does not depend on the runs b
   joints  ; ((joint value) ...): the torso and the arm joints
   (hash 0 :type fixnum)) ; GOALS-HASH of the goals
 
+(deftype pose-7 () '(simple-array double-float (7)))
+
 (defun pose-7 (pose)
-  (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose)))
-    (vector (cl-transforms:x o) (cl-transforms:y o) (cl-transforms:z o)
-            (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q))))
+  "POSE as a 7-vector of doubles: x y z, then the quaternion x y z w."
+  (let ((o (cl-transforms:origin pose)) (q (cl-transforms:orientation pose))
+        (v (make-array 7 :element-type 'double-float)))
+    (setf (aref v 0) (cl-transforms:x o) (aref v 1) (cl-transforms:y o) (aref v 2) (cl-transforms:z o)
+          (aref v 3) (cl-transforms:x q) (aref v 4) (cl-transforms:y q) (aref v 5) (cl-transforms:z q)
+          (aref v 6) (cl-transforms:w q))
+    v))
 
 (defun same-pose-7-p (a b)
   "True when the 7-vectors A and B are the same pose (0.001 mm; a quaternion and its negation
 are one rotation)."
+  (declare (type pose-7 a b))
   (and (loop for i below 3 always (< (abs (- (aref a i) (aref b i))) 1d-6))
-       (> (abs (loop for i from 3 below 7 sum (* (aref a i) (aref b i)))) (- 1d0 1d-12))))
+       (> (abs (loop with dot double-float = 0d0
+                     for i from 3 below 7 do (incf dot (* (aref a i) (aref b i)))
+                     finally (return dot)))
+          (- 1d0 1d-12))))
 
 (defun reach-goals-key (goals)
   "GOALS ((arm . tcp-map-pose) ...) as the reach memory compares them."
@@ -56,8 +66,11 @@ goals in full only when the hashes agree."
                             (+ (* h 31) (logand #xffffffff (round x 1d-4)))))))))))
 
 (defun same-goals-p (a b)
-  (and (= (length a) (length b))
-       (every (lambda (x y) (and (eq (car x) (car y)) (same-pose-7-p (cdr x) (cdr y)))) a b)))
+  "True when the REACH-GOALS-KEYs A and B name the same arms at the same poses."
+  (loop for x = a then (cdr x) for y = b then (cdr y)
+        while (and x y)
+        always (and (eq (caar x) (caar y)) (same-pose-7-p (cdar x) (cdar y)))
+        finally (return (and (null x) (null y)))))
 
 (defun base-within-offsets-p (base base0 reach)
   "True when the map pose BASE is one MOVE-TCP may put the base at from BASE0: BASE0 shifted

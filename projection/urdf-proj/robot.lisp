@@ -100,7 +100,11 @@ TCP-IN-EE-POSE fact, else the current relative pose of the tool frame link, else
 
 (defun movable-joint-p (robot joint)
   "True when JOINT is a movable (revolute, continuous, prismatic) joint of ROBOT."
-  (and (stringp joint) (member joint (btr:joint-names robot) :test #'string=) t))
+  (let ((index (and (stringp joint) (gethash joint (btr::km-joint-index (btr::%model robot))))))
+    (and index
+         (member (getf (aref (btr::km-joint-info (btr::%model robot)) index) :type)
+                 '(:revolute :continuous :prismatic))
+         t)))
 
 (defun neck-joints ()
   "The neck joints of the current robot, base first."
