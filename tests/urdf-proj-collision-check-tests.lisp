@@ -85,23 +85,32 @@
                        (error (e) (princ-to-string e)))))
         (is (search "articulated" message) "~s" message)))))
 
+(defun stand-at-the-grasp-pose ()
+  "Park the arms, drive the robot to *GRASP-BASE-POSE* and raise its torso to 0.3."
+  (urdf-proj:with-simulated-robot
+    (urdf-proj:move-joints :park :park)
+    (urdf-proj:drive *grasp-base-pose*)
+    (urdf-proj:move-torso 0.3)))
+
+(defun solves-reaching (goal &optional (arm :left))
+  "The number of IK solutions MOVE-TCP tried to bring the tool frame of ARM to GOAL, and
+whether it failed (a low-level manipulation failure)."
+  (calls-during 'urdf-proj:solve-ik
+                (lambda ()
+                  (handler-case (progn (urdf-proj:with-simulated-robot
+                                         (if (eq arm :left)
+                                             (urdf-proj:move-tcp goal nil)
+                                             (urdf-proj:move-tcp nil goal)))
+                                       nil)
+                    (common-fail:manipulation-low-level-failure () t)))))
+
 (test a-tool-goal-whose-hand-touches-the-world-is-given-up-at-once
   (with-kitchen
-    (urdf-proj:with-simulated-robot
-      (urdf-proj:move-joints :park :park)
-      (urdf-proj:drive *grasp-base-pose*)
-      (urdf-proj:move-torso 0.3))
+    (stand-at-the-grasp-pose)
     ;; the gripper half inside the table top: no base offset or torso height frees it
-    (let ((goal (ps "map" -2.0 -0.80 0.72 (/ pi -2))))
-      (multiple-value-bind (solves failed)
-          (calls-during 'urdf-proj:solve-ik
-                        (lambda ()
-                          (handler-case (progn (urdf-proj:with-simulated-robot
-                                                 (urdf-proj:move-tcp nil goal))
-                                               nil)
-                            (common-fail:manipulation-low-level-failure () t))))
-        (is (eq t failed))
-        (is (<= 1 solves 12) "~d IK solutions were tried for a hand inside the table" solves)))))
+    (multiple-value-bind (solves failed) (solves-reaching (ps "map" -2.0 -0.80 0.72 (/ pi -2)) :right)
+      (is (eq t failed))
+      (is (<= 1 solves 12) "~d IK solutions were tried for a hand inside the table" solves))))
 
 (defun deepest-hand-contact (robot links)
   "The smallest contact distance (metres, negative: into it) of ROBOT's LINKS with the kitchen."
@@ -115,25 +124,25 @@
 (defun hand-sunk-goal (robot depth)
   "A tool goal over the table (yaw -pi/2, as in the test above) lowered in 0.5 mm steps until
 the left hand's links reach at least DEPTH metres into the kitchen with the hand there
-\(reached with collisions allowed): the goal and how deep they reach."
+\(reached with collisions allowed), with the arms parked again afterwards: the goal and how
+deep they reach."
   (let ((links (urdf-proj::hand-links :left robot)))
-    (loop for z from 0.80d0 downto 0.70d0 by 0.0005d0
-          for goal = (ps "map" -2.0 -0.80 z (/ pi -2))
-          do (urdf-proj:with-simulated-robot
-               (urdf-proj:move-tcp goal nil :collision-mode :allow-all))
-             (let ((d (deepest-hand-contact robot links)))
-               (when (<= d (- depth))
-                 (return (values goal d)))))))
+    (unwind-protect
+         (loop for z from 0.80d0 downto 0.70d0 by 0.0005d0
+               for goal = (ps "map" -2.0 -0.80 z (/ pi -2))
+               do (urdf-proj:with-simulated-robot
+                    (urdf-proj:move-tcp goal nil :collision-mode :allow-all))
+                  (let ((d (deepest-hand-contact robot links)))
+                    (when (<= d (- depth))
+                      (return (values goal d)))))
+      (urdf-proj:with-simulated-robot (urdf-proj:move-joints :park :park)))))
 
 (test a-tool-goal-whose-hand-sinks-beyond-what-the-ik-can-move-it-is-given-up-at-once
   ;; A finger a few millimetres into the table: less than the fixed centimetre of old, more
   ;; than another IK solution within the tolerances can move it.
   (with-kitchen
     (let ((robot (robot)))
-      (urdf-proj:with-simulated-robot
-        (urdf-proj:move-joints :park :park)
-        (urdf-proj:drive *grasp-base-pose*)
-        (urdf-proj:move-torso 0.3))
+      (stand-at-the-grasp-pose)
       (let* ((chain (urdf-proj::arm-ik-chain :left robot))
              (slacks (mapcar (lambda (l) (urdf-proj::goal-bound-slack robot chain l 0d0 0d0))
                              (urdf-proj::goal-bound-links chain robot))))
@@ -142,14 +151,7 @@ the left hand's links reach at least DEPTH metres into the kitchen with the hand
       (multiple-value-bind (goal depth) (hand-sunk-goal robot 0.006d0)
         (is (not (null goal)))
         (is (< -0.0095d0 depth) "the hand reaches ~,4f m into the table" depth)
-        (urdf-proj:with-simulated-robot (urdf-proj:move-joints :park :park))
-        (multiple-value-bind (solves failed)
-            (calls-during 'urdf-proj:solve-ik
-                          (lambda ()
-                            (handler-case (progn (urdf-proj:with-simulated-robot
-                                                   (urdf-proj:move-tcp goal nil))
-                                                 nil)
-                              (common-fail:manipulation-low-level-failure () t))))
+        (multiple-value-bind (solves failed) (solves-reaching goal)
           (is (eq t failed))
           (is (<= 1 solves 12) "~d IK solutions were tried for a hand ~,4f m inside the table"
               solves depth))))))
@@ -158,19 +160,10 @@ the left hand's links reach at least DEPTH metres into the kitchen with the hand
   ;; Less deep than another IK solution may move the hand: other candidates are tried.
   (with-kitchen
     (let ((robot (robot)))
-      (urdf-proj:with-simulated-robot
-        (urdf-proj:move-joints :park :park)
-        (urdf-proj:drive *grasp-base-pose*)
-        (urdf-proj:move-torso 0.3))
+      (stand-at-the-grasp-pose)
       (multiple-value-bind (goal depth) (hand-sunk-goal robot 0.0001d0)
         (is (not (null goal)))
         (is (< -0.001d0 depth) "the hand reaches ~,4f m into the table" depth)
-        (urdf-proj:with-simulated-robot (urdf-proj:move-joints :park :park))
-        (let ((solves (calls-during 'urdf-proj:solve-ik
-                                    (lambda ()
-                                      (ignore-errors
-                                       (handler-case (urdf-proj:with-simulated-robot
-                                                       (urdf-proj:move-tcp goal nil))
-                                         (common-fail:manipulation-low-level-failure () nil)))))))
+        (let ((solves (solves-reaching goal)))
           (is (> solves 12) "only ~d IK solutions were tried for a hand touching the table"
               solves))))))
