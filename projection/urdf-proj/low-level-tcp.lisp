@@ -207,28 +207,28 @@ to make deeper than any other IK solution of the goals can move it (GOAL-BOUND-S
 current solution's POSITION-ERROR and ROTATION-ERROR, plus *GOAL-BOUND-PENETRATION*): no
 other base offset or torso value can free it, as the hand stays at its goal."
   (let* ((world (btr:world robot))
-         (slack (make-hash-table :test 'equal))
+         (bound-links (mapcar (lambda (chain) (cons chain (goal-bound-links chain robot))) chains))
          (except (multiple-value-bind (attached attached-objects planes)
                      (collision-excepts world robot)
                    (declare (ignore attached))
                    (append planes attached-objects)))
          (intended (intended-contacts robot)))
-    (dolist (chain chains)
-      (dolist (link (goal-bound-links chain robot))
-        (when (robot-link-index robot link)
-          (setf (gethash link slack)
-                (+ (goal-bound-slack robot chain link position-error rotation-error)
-                   *goal-bound-penetration*)))))
-    (loop for (nil la other-handle other-la distance)
-            in (cram-native:object-contacts (btr::world-handle world) (btr:object-handle robot)
-                                            :threshold 0d0
-                                            :except (mapcar #'btr:object-handle except))
-          for link = (btr::link-name-of robot la)
-          for bound = (and link (gethash link slack))
-          for other = (and bound (< distance (- bound)) (btr::object-by-handle world other-handle))
-          thereis (and other (not (eq other robot))
-                       (not (intended-contact-p intended robot link other
-                                                (btr::link-name-of other other-la)))))))
+    (flet ((chain-fixing (link)
+             (car (find-if (lambda (entry) (member link (cdr entry) :test #'string=)) bound-links))))
+      (loop for (nil la other-handle other-la distance)
+              in (cram-native:object-contacts (btr::world-handle world) (btr:object-handle robot)
+                                              :threshold (- *goal-bound-penetration*)
+                                              :except (mapcar #'btr:object-handle except))
+            for link = (btr::link-name-of robot la)
+            for chain = (and link (chain-fixing link))
+            for other = (and chain (btr::object-by-handle world other-handle))
+            thereis (and other (not (eq other robot))
+                         ;; the slack of a link that touches something, computed only for it
+                         (< distance (- (+ (goal-bound-slack robot chain link
+                                                             position-error rotation-error)
+                                           *goal-bound-penetration*)))
+                         (not (intended-contact-p intended robot link other
+                                                  (btr::link-name-of other other-la))))))))
 
 (defun shoulder-positions (robot ee-goals torso torsos)
   "For each value of TORSOS (NIL: the torso as it is), a list with, per goal of EE-GOALS ((arm

@@ -100,11 +100,8 @@ TCP-IN-EE-POSE fact, else the current relative pose of the tool frame link, else
 
 (defun movable-joint-p (robot joint)
   "True when JOINT is a movable (revolute, continuous, prismatic) joint of ROBOT."
-  (let ((index (and (stringp joint) (gethash joint (btr::km-joint-index (btr::%model robot))))))
-    (and index
-         (member (getf (aref (btr::km-joint-info (btr::%model robot)) index) :type)
-                 '(:revolute :continuous :prismatic))
-         t)))
+  (let ((urdf-joint (and (stringp joint) (gethash joint (cl-urdf:joints (btr:urdf robot))))))
+    (and urdf-joint (cl-urdf:movable-joint-p urdf-joint))))
 
 (defun neck-joints ()
   "The neck joints of the current robot, base first."
