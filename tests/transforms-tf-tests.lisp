@@ -247,6 +247,58 @@
     (is (plusp looked))
     (is (zerop bad) "~d of ~d lookups saw half a batch" bad looked)))
 
+(test tf-deferred-updates
+  ;; an update put off with DEFER-UPDATE runs once, when the transformer is next read or
+  ;; written, and before what that reader or writer does
+  (let* ((tf (make-test-tree))
+         (runs 0)
+         (update (lambda ()
+                   (incf runs)
+                   (cl-tf:set-transform tf (make-transform-stamped
+                                            "odom_combined" "base_footprint" 8
+                                            (make-3d-vector 2 0 0) (make-identity-rotation))))))
+    (is (eq tf (cl-tf:defer-update tf update)))
+    (is (= 0 runs))
+    (is (close-transform-p (lookup-transform tf "map" "base_footprint") '(1 4 0) 90))
+    (is (= 1 runs))
+    (lookup-transform tf "map" "base_footprint")
+    (is (= 1 runs))
+    ;; a later deferred update replaces one that has not run
+    (cl-tf:defer-update tf (lambda () (incf runs 10)))
+    (cl-tf:defer-update tf update)
+    (is (cl-tf:frame-exists tf "base_footprint"))
+    (is (= 2 runs))
+    ;; a transform set after the deferral wins over the deferred one
+    (cl-tf:defer-update tf update)
+    (cl-tf:set-transform tf (make-transform-stamped "odom_combined" "base_footprint" 9
+                                                    (make-3d-vector 3 0 0)
+                                                    (make-identity-rotation)))
+    (is (= 3 runs))
+    (is (close-transform-p (lookup-transform tf "map" "base_footprint") '(1 5 0) 90))
+    ;; CLEAR and KNOWN-FRAMES see the deferred transforms too
+    (cl-tf:defer-update tf (lambda () (cl-tf:set-transform tf (make-transform-stamped
+                                                               "base_footprint" "hand" 1
+                                                               (make-3d-vector 0 0 1)
+                                                               (make-identity-rotation)))))
+    (is (member "hand" (cl-tf:known-frames tf) :test #'string=))
+    (cl-tf:defer-update tf (lambda () (incf runs 100)))
+    (clear tf :static t)
+    (is (= 103 runs))
+    (is (null (cl-tf:known-frames tf)))
+    ;; a lookup already waiting for a frame gets a deferred update at once
+    (let* ((tf (make-test-tree))
+           (reader (bt:make-thread (lambda () (lookup-transform tf "map" "late_frame" :timeout 5))
+                                   :name "waiting tf reader")))
+      (loop until (plusp (cl-transforms-stamped::transformer-waiters tf)) do (sleep 0.001))
+      (cl-tf:defer-update tf (lambda ()
+                               (cl-tf:set-transform tf (make-transform-stamped
+                                                        "base_footprint" "late_frame" 0
+                                                        (make-3d-vector 0 0 1)
+                                                        (make-identity-rotation)))))
+      (is (close-transform-p (bt:join-thread reader) '(1 3 1) 90)))
+    (is (typep (handler-case (cl-tf:defer-update tf 42) (error (e) e))
+               'cl-transforms:transform-input-error))))
+
 ;;; Stamped objects
 
 (test stamped-constructors-and-copies

@@ -95,6 +95,40 @@
                         (list :ok))))
     (is (eq :a (urdf-proj:with-projected-robot :a)))))
 
+;; after a motion, TF is written only when it is read: then it shows the robot and the
+;; environment as they were when the motion ended, not as they were changed since
+(test tf-written-when-read-as-of-the-last-motion
+  (with-kitchen
+    (urdf-proj:with-simulated-robot
+      (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
+             (joint "sink_area_left_upper_drawer_main_joint")
+             (handle "sink_area_left_upper_drawer_handle")
+             (before (btr:link-pose kitchen handle)))
+        (urdf-proj:move-joints :park :park)
+        (is (cl-transforms-stamped::transformer-deferred cram-tf:*transformer*))
+        (btr:set-robot-state-from-joints `((,joint 0.3d0)) kitchen)
+        (urdf-proj:drive *grasp-base-pose*)
+        (let ((at-motion (btr:pose (robot)))
+              (hand (btr:link-pose (robot) "l_gripper_tool_frame"))
+              (opened (btr:link-pose kitchen handle)))
+          (is (> (cl-transforms:v-dist (cl-transforms:origin before) (cl-transforms:origin opened))
+                 0.29d0))
+          ;; changed after the motion, without one: TF keeps the motion's state
+          (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                                            (cl-transforms:make-identity-rotation)))
+          (btr:set-robot-state-from-joints `((,joint 0d0)) kitchen)
+          (flet ((in-map (frame)
+                   (cl-transforms:transform->pose
+                    (cl-tf:lookup-transform cram-tf:*transformer* "map" frame))))
+            (is (pose-near at-motion (in-map "base_footprint") 1d-9))
+            (is (pose-near hand (in-map "l_gripper_tool_frame") 1d-9))
+            (is (pose-near opened (in-map handle) 1d-9))
+            (is (null (cl-transforms-stamped::transformer-deferred cram-tf:*transformer*)))
+            ;; an explicit update writes the state as it is now
+            (urdf-proj:update-tf-from-belief-state)
+            (is (pose-near (btr:pose (robot)) (in-map "base_footprint") 1d-9))
+            (is (pose-near before (in-map handle) 1d-9))))))))
+
 ;;; ---- seed 002: the low-level block ------------------------------------------------------------
 
 (test seed-002-low-level-block

@@ -30,9 +30,10 @@ than the ROBOT-BASE-FRAME fact names (Pepper: base_footprint on the floor, base_
   (robot-frame `(rob-int:robot-tool-frame ,rob-int:*robot-name* ,arm ?f) '?f default))
 
 (defun start-projection ()
-  "Startup of the projection environment: check that there is a robot and write TF."
+  "Startup of the projection environment: check that there is a robot and give TF the belief
+state (written when TF is first read)."
   (robot-object)
-  (update-tf-from-belief-state :force t))
+  (defer-tf-from-belief-state :force t))
 
 (defmacro define-simulated-robot-environment (name)
   "Define the projection environment NAME of the simulated robot: a TF transformer fed from

@@ -1,6 +1,7 @@
 ;;;; TF of the simulated robot: the transformer of the projection environment is fed from the
 ;;;; belief state (map → odom → robot root → every link; map → each environment's links).
-;;;; Also the bookkeeping every motion does: TF update, snapshot, ROBOT-STATE-CHANGED.
+;;;; Also the bookkeeping every motion does: TF update (written when TF is next read),
+;;;; snapshot, ROBOT-STATE-CHANGED.
 
 (in-package :cram-urdf-projection)
 
@@ -106,20 +107,17 @@ inverse(P) * C, translation and quaternion."
 doubles written (NIL: none yet)."
   (make-array (length (link-layout-names (link-layout object))) :initial-element nil))
 
-(defun publish-object-links (transformer object parent-frame stamp &key skip cache)
+(defun publish-object-links (transformer object parent-frame stamp poses &key skip cache)
   "Write the root link of the articulated OBJECT under PARENT-FRAME (a frame that coincides
-with the map) and every link under its parent link. Links of the same name as a link of the
-articulated object SKIP are left out. With CACHE (MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is
-unchanged is not written again."
+with the map) and every link under its parent link, from POSES (LINK-POSES-VECTOR of OBJECT).
+Links of the same name as a link of the articulated object SKIP are left out. With CACHE
+\(MAKE-LINK-CACHE of OBJECT), a link whose pose relative to its parent is unchanged is not
+written again."
   (let* ((layout (link-layout object))
          (names (link-layout-names layout))
-         ;; on the stack: read here only (what is kept is copied)
-         (poses (make-array (* 7 (length names)) :element-type 'double-float))
          (root-i (link-layout-root layout))
          (root (svref names root-i))
          (scratch (make-array 7 :element-type 'double-float)))
-    (declare (dynamic-extent poses))
-    (link-poses-vector object poses)
     (flet ((write-link (parent child-index relative)
              (let ((last (and cache (svref cache child-index))))
                (unless (and last (same-pose-vector-p last relative))
@@ -153,6 +151,76 @@ unchanged is not written again."
 concurrent plan branches (CPL:PAR) change the belief state one after the other, and none sees
 another half done.")
 
+(defstruct (tf-snapshot (:constructor make-tf-snapshot ()))
+  "What the TF of the belief state has to show and has not written yet: the STAMP, the frame
+the robot's root link hangs from (PARENT; ODOM, when that is an odom frame under the map), the
+ROBOT and its link poses (ROBOT-POSES, 7 doubles per link), OBJECTS ((object . link-poses)
+...), the environment's articulated objects that changed, and the SIGNATURES table their
+changes are told by. PENDING while not written."
+  (pending nil) (stamp 0d0) (odom nil) (parent nil) (robot nil) (robot-poses nil)
+  (objects '()) (signatures nil))
+
+(defvar *tf-snapshots* (make-hash-table :test 'eq :weakness :key :synchronized t)
+  "CL-TF:TRANSFORMER → its TF-SNAPSHOT.")
+
+(defun tf-snapshot (transformer)
+  "The TF-SNAPSHOT of TRANSFORMER (made on first use)."
+  (or (gethash transformer *tf-snapshots*)
+      (setf (gethash transformer *tf-snapshots*) (make-tf-snapshot))))
+
+(defun capture-tf (snapshot world force)
+  "Take into SNAPSHOT what the TF has to show of WORLD now: the robot's link poses, and those of
+each other articulated object whose joints or pose changed since the last capture (every one
+with FORCE). A capture while SNAPSHOT is pending adds to it: what it has not written is kept
+unless captured anew."
+  (let* ((robot (robot-object world))
+         (odom (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
+         (root (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))
+         (odom (and odom (not (string= odom root)) (not (btr:link-exists-p robot odom)) odom))
+         (signatures (or *environment-tf-signatures* (make-hash-table :test 'eq)))
+         (size (* 7 (length (link-layout-names (link-layout robot)))))
+         (poses (tf-snapshot-robot-poses snapshot)))
+    (unless (and poses (eq robot (tf-snapshot-robot snapshot)) (= (length poses) size))
+      (setf poses (make-array size :element-type 'double-float)))
+    (link-poses-vector robot poses)
+    (when force (remhash robot signatures))
+    (dolist (o (btr:objects world))
+      (when (and (typep o 'btr:robot-object) (not (eq o robot)))
+        (let ((signature (environment-signature o)))
+          (when (or force (not (same-signature-p signature (gethash (btr:name o) signatures))))
+            (setf (tf-snapshot-objects snapshot)
+                  (acons o (link-poses-vector o)
+                         (remove o (tf-snapshot-objects snapshot) :key #'car)))
+            (setf (gethash (btr:name o) signatures) signature)))))
+    (setf (tf-snapshot-stamp snapshot) (cram-tf-stamp)
+          (tf-snapshot-odom snapshot) odom
+          (tf-snapshot-parent snapshot) (or odom cram-tf:*fixed-frame*)
+          (tf-snapshot-robot snapshot) robot
+          (tf-snapshot-robot-poses snapshot) poses
+          (tf-snapshot-signatures snapshot) signatures
+          (tf-snapshot-pending snapshot) t)
+    snapshot))
+
+(defun write-tf (snapshot transformer)
+  "Write what SNAPSHOT holds into TRANSFORMER, when it is pending: map → odom frame (identity)
+→ the robot's root link → each link, only the links that moved relative to their parent since
+the last write; the captured environment objects' links under map."
+  (when (tf-snapshot-pending snapshot)
+    (let* ((stamp (tf-snapshot-stamp snapshot))
+           (robot (tf-snapshot-robot snapshot))
+           (signatures (tf-snapshot-signatures snapshot))
+           (cache (or (gethash robot signatures)
+                      (setf (gethash robot signatures) (make-link-cache robot)))))
+      (when (tf-snapshot-odom snapshot)
+        (set-tf transformer cram-tf:*fixed-frame* (tf-snapshot-odom snapshot)
+                (cl-transforms:make-identity-transform) stamp))
+      (publish-object-links transformer robot (tf-snapshot-parent snapshot) stamp
+                            (tf-snapshot-robot-poses snapshot) :cache cache)
+      (loop for (o . poses) in (reverse (tf-snapshot-objects snapshot))
+            do (publish-object-links transformer o cram-tf:*fixed-frame* stamp poses :skip robot))
+      (setf (tf-snapshot-objects snapshot) '()
+            (tf-snapshot-pending snapshot) nil))))
+
 (defun update-tf-from-belief-state (&key (transformer cram-tf:*transformer*)
                                          (world btr:*current-bullet-world*) force)
   "Write the robot of WORLD into TRANSFORMER: map → odom frame (identity) → the robot's root
@@ -161,31 +229,23 @@ those whose state changed since the last call (all with FORCE), as one update th
 whole or not at all. Returns TRANSFORMER."
   (sb-thread:with-recursive-lock (*motion-lock*)
     (cl-transforms-stamped:with-transforms-batch (transformer)
-      (%update-tf-from-belief-state transformer world force))))
+      (write-tf (capture-tf (tf-snapshot transformer) world force) transformer)))
+  transformer)
 
-(defun %update-tf-from-belief-state (transformer world force)
-  (let* ((robot (robot-object world))
-         (stamp (cram-tf-stamp))
-         (odom (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
-         (root (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))
-         (parent (if (and odom (not (string= odom root)) (not (btr:link-exists-p robot odom)))
-                     (progn (set-tf transformer cram-tf:*fixed-frame* odom
-                                    (cl-transforms:make-identity-transform) stamp)
-                            odom)
-                     cram-tf:*fixed-frame*)))
-    (let ((signatures (or *environment-tf-signatures* (make-hash-table :test 'eq))))
-      ;; the robot's links under its own key (the robot object): only the changed ones
-      (when force (remhash robot signatures))
-      (publish-object-links transformer robot parent stamp
-                            :cache (or (gethash robot signatures)
-                                       (setf (gethash robot signatures) (make-link-cache robot))))
-      (dolist (o (btr:objects world))
-        (when (and (typep o 'btr:robot-object) (not (eq o robot)))
-          (let ((signature (environment-signature o)))
-            (when (or force (not (same-signature-p signature (gethash (btr:name o) signatures))))
-              (publish-object-links transformer o cram-tf:*fixed-frame* stamp :skip robot)
-              (setf (gethash (btr:name o) signatures) signature))))))
-    transformer))
+(defun defer-tf-from-belief-state (&key (transformer cram-tf:*transformer*)
+                                        (world btr:*current-bullet-world*) force)
+  "As UPDATE-TF-FROM-BELIEF-STATE, of WORLD as it is now, but written only when TRANSFORMER is
+next read or written (CL-TF:DEFER-UPDATE): after each motion, TF costs nothing until a plan
+looks something up. Returns TRANSFORMER."
+  (sb-thread:with-recursive-lock (*motion-lock*)
+    (cl-transforms-stamped:with-transforms-batch (transformer)
+      (let* ((snapshot (tf-snapshot transformer))
+             (pending (tf-snapshot-pending snapshot)))
+        (capture-tf snapshot world force)
+        (unless pending
+          (cl-transforms-stamped:defer-update transformer
+                                              (lambda () (write-tf snapshot transformer)))))))
+  transformer)
 
 ;;; ---- bookkeeping of every motion ------------------------------------------------------------
 
@@ -196,10 +256,11 @@ whole or not at all. Returns TRANSFORMER."
   "Functions called with the target point (x y z) in the map of each LOOK-AT at a point.")
 
 (defun after-motion (label)
-  "Run after each motion (also a failed one): TF update inside the projection environment,
+  "Run after each motion (also a failed one): TF update inside the projection environment
+\(DEFER-TF-FROM-BELIEF-STATE: written when the transformer is next read or written),
 a snapshot labelled LABEL, *AFTER-MOTION-HOOKS*, and the ROBOT-STATE-CHANGED event."
   (when *tf-from-belief-state*
-    (update-tf-from-belief-state))
+    (defer-tf-from-belief-state))
   (cpl:note-picture (btr:snapshot label))
   (dolist (hook *after-motion-hooks*) (funcall hook label))
   (coe:on-event (make-instance 'cpoe:robot-state-changed)))

@@ -54,7 +54,10 @@ TRANSFORM from the parent to it, STATIC when set as such."
                :type simple-vector
                :documentation "Pairs (name . TF-FRAME) of recently used frames whose name is
 the very string object of the frame's key in FRAMES, found by EQ without hashing the name.")
-   (name-cache-next :initform 0 :type fixnum :accessor transformer-name-cache-next))
+   (name-cache-next :initform 0 :type fixnum :accessor transformer-name-cache-next)
+   (deferred :initform nil :accessor transformer-deferred
+             :documentation "NIL, or a function of no arguments that sets transforms of the
+transformer: an update DEFER-UPDATE put off until the transformer is next read or written."))
   (:documentation "A buffer of TRANSFORM-STAMPEDs forming a frame tree (each frame has at most one
 parent). SET-TRANSFORM adds or replaces the transform of a child frame; LOOKUP-TRANSFORM,
 TRANSFORM-POSE-STAMPED and TRANSFORM-POINT-STAMPED answer with the latest data along the path
@@ -102,6 +105,37 @@ WITH-RECURSIVE-LOCK does."
                    (return-from locked
                      (unwind-protect (,fn) (sb-thread:release-mutex ,lock)))))
                (sb-thread:with-recursive-lock (,lock) (,fn))))))))
+
+(defun %run-deferred (transformer)
+  "Run the update deferred in TRANSFORMER, if any, holding its lock (lookups in other threads
+see all of it or none)."
+  (sb-thread:with-recursive-lock ((transformer-lock transformer))
+    (let ((update (transformer-deferred transformer)))
+      (when update
+        (setf (transformer-deferred transformer) nil)
+        (funcall update)))))
+
+(declaim (inline %settle))
+(defun %settle (transformer)
+  "Before TRANSFORMER is read or written: run the update deferred in it, if any."
+  (when (transformer-deferred transformer)
+    (%run-deferred transformer)))
+
+(defun defer-update (transformer update)
+  "Put off UPDATE, a function of no arguments that sets transforms of TRANSFORMER, until
+TRANSFORMER is next read or written (a lookup, SET-TRANSFORM, FRAME-EXISTS, KNOWN-FRAMES,
+CLEAR): every reader sees its transforms as though it had run now, and an update nobody reads
+costs nothing. UPDATE replaces an update deferred before that has not run yet, so it must write
+what that one would have written too. Runs UPDATE at once when a lookup is waiting for a
+change. Returns TRANSFORMER."
+  (%check-transformer transformer 'defer-update)
+  (unless (functionp update)
+    (cl-transforms::input-error update "a function of no arguments" 'defer-update))
+  (sb-thread:with-recursive-lock ((transformer-lock transformer))
+    (setf (transformer-deferred transformer) update)
+    (when (plusp (transformer-waiters transformer))
+      (%run-deferred transformer)))
+  transformer)
 
 (defun %timeout (timeout place)
   "TIMEOUT in seconds as a non-negative double float; NIL means 0."
@@ -155,6 +189,7 @@ the frame tree signals TF-CONNECTIVITY-ERROR. Returns TRANSFORM."
     (when (and (= (length parent-name) (length child-name)) (string= parent-name child-name))
       (cl-transforms::input-error transform "a transform between two different frames"
                                   'set-transform))
+    (%settle transformer)
     (unless (%with-transformer-lock (transformer)
               (let ((parent (%intern-frame transformer parent-name))
                     (child (%intern-frame transformer child-name)))
@@ -321,6 +356,7 @@ the normalised target and source names; signals a TRANSFORM-STAMPED-ERROR otherw
   (let* ((target (%frame-name target place))
          (source (%frame-name source place))
          (timeout (%timeout timeout place)))
+    (%settle transformer)
     (multiple-value-bind (ok class description)
         (%with-transformer-lock (transformer) (%try-lookup transformer target source buffer))
       (unless ok
@@ -421,12 +457,14 @@ all of BODY's transforms or none of them. Returns the values of BODY."
   "True when FRAME has appeared in a transform given to TRANSFORMER."
   (%check-transformer transformer 'frame-exists)
   (let ((name (%frame-name frame 'frame-exists)))
+    (%settle transformer)
     (sb-thread:with-recursive-lock ((transformer-lock transformer))
       (values (gethash name (transformer-frames transformer))))))
 
 (defun known-frames (transformer)
   "The names of every frame TRANSFORMER knows, sorted."
   (%check-transformer transformer 'known-frames)
+  (%settle transformer)
   (sb-thread:with-recursive-lock ((transformer-lock transformer))
     (sort (alexandria:hash-table-keys (transformer-frames transformer)) #'string<)))
 
@@ -434,6 +472,7 @@ all of BODY's transforms or none of them. Returns the values of BODY."
   "Forget every transform that was not set as static (all of them when STATIC is true), and the
 frames no remaining transform mentions. Returns TRANSFORMER."
   (%check-transformer transformer 'clear)
+  (%settle transformer)
   (sb-thread:with-recursive-lock ((transformer-lock transformer))
     (let ((frames (transformer-frames transformer))
           (used (make-hash-table :test 'eq)))
