@@ -67,11 +67,13 @@ link other other-link distance)."
         (%collect-pairs (lambda (pi4 pd cap)
                           (ccall "cn_object_contacts" world object th pi4 pd cap))))))
 
-(defun int-vector (values what)
-  "VALUES (a list of integers) as a vector of 32-bit integers; WHAT names them in an error."
-  (let ((v (make-array (length values) :element-type '(signed-byte 32))))
-    (loop for x in values for i from 0 do (setf (aref v i) (int-arg x 'object-first-contact what)))
-    v))
+(defun fill-int-vector (v values what &optional (start 0))
+  "Store VALUES (a list of integers, :ANY as -2) into the 32-bit integer vector V from START;
+WHAT names them in an error. Returns the index after the last."
+  (declare (type (simple-array (signed-byte 32) (*)) v) (type fixnum start))
+  (dolist (x values start)
+    (setf (aref v start) (if (eq x :any) -2 (int-arg x 'object-first-contact what)))
+    (incf start)))
 
 (defun object-first-contact (world object &key (threshold 0d0) except skip-links allowed)
   "The first contact of the articulated OBJECT's links with another object (or of two of its
@@ -79,21 +81,31 @@ links, when its self-collision is on) that is not left out, as (object link othe
 or NIL when there is none: a yes/no collision check that stops at the first contact. Left out:
 the objects of EXCEPT (handles), the links of OBJECT in SKIP-LINKS (indices) and the contacts
 ALLOWED covers, a list of (link other other-link) with :ANY for any."
-  (let ((th (real-arg threshold 'object-first-contact "threshold"))
-        (ex (int-vector except "object to leave out"))
-        (skip (int-vector skip-links "link to leave out"))
-        (al (int-vector (loop for triple in allowed
-                              append (mapcar (lambda (x) (if (eq x :any) -2 x)) triple))
-                        "allowed contact"))
-        (out (make-array 4 :element-type '(signed-byte 32))))
-    (declare (dynamic-extent out))
-    (unless (every (lambda (triple) (and (listp triple) (= 3 (length triple)))) allowed)
-      (error "OBJECT-FIRST-CONTACT: allowed contacts ~s: expected a list of (link other other-link)."
-             allowed))
-    (when (= 1 (with-vector-pointers ((pex ex) (pskip skip) (pal al) (pout out))
-                 (ccall "cn_object_first_contact" world object th pex (length ex)
-                        pskip (length skip) pal (floor (length al) 3) pout)))
-      (coerce out 'list))))
+  (unless (every (lambda (triple) (and (listp triple) (= 3 (length triple)))) allowed)
+    (error "OBJECT-FIRST-CONTACT: allowed contacts ~s: expected a list of (link other other-link)."
+           allowed))
+  (let* ((th (real-arg threshold 'object-first-contact "threshold"))
+         (nex (length except)) (nskip (length skip-links)) (nal (* 3 (length allowed)))
+         (size (+ nex nskip nal)))
+    (flet ((check (v)
+             ;; V: the three lists one after the other
+             (declare (type (simple-array (signed-byte 32) (*)) v))
+             (let ((out (make-array 4 :element-type '(signed-byte 32))))
+               (declare (dynamic-extent out))
+               (fill-int-vector v except "object to leave out")
+               (fill-int-vector v skip-links "link to leave out" nex)
+               (let ((i (+ nex nskip)))
+                 (dolist (triple allowed) (setf i (fill-int-vector v triple "allowed contact" i))))
+               (when (= 1 (with-vector-pointers ((pv v) (pout out))
+                            (ccall "cn_object_first_contact" world object th
+                                   pv nex (sb-sys:sap+ pv (* 4 nex)) nskip
+                                   (sb-sys:sap+ pv (* 4 (+ nex nskip))) (floor nal 3) pout)))
+                 (list (aref out 0) (aref out 1) (aref out 2) (aref out 3))))))
+      (if (<= size 4096)
+          (let ((v (make-array size :element-type '(signed-byte 32))))
+            (declare (dynamic-extent v))
+            (check v))
+          (check (make-array size :element-type '(signed-byte 32)))))))
 
 (defun closest-distance (world object-a object-b &key (link-a -1) (link-b -1) (max-distance 1d0))
   "Closest distance between OBJECT-A and OBJECT-B (or the given links), searched up to

@@ -85,6 +85,28 @@
                        (error (e) (princ-to-string e)))))
         (is (search "articulated" message) "~s" message)))))
 
+(test the-first-contact-query-packs-long-lists
+  ;; the robot standing inside the table: what is left out, whether given first or after 2 000
+  ;; triples that cover nothing (past what goes on the stack)
+  (with-kitchen
+    (let* ((w (btr::world-handle btr:*current-bullet-world*))
+           (robot (btr:object-handle (robot)))
+           (kitchen (btr:object-handle (btr:object btr:*current-bullet-world* :iai-kitchen)))
+           (bottle (btr:object-handle (btr:object btr:*current-bullet-world* 'bottle-1)))
+           (filler (loop repeat 2000 collect (list 0 -5 0))))
+      (setf (btr:pose (robot)) (cl-transforms:make-pose (cl-transforms:make-3d-vector -2.0 -0.9 0)
+                                                        (cl-transforms:make-identity-rotation)))
+      (let ((contact (cram-native:object-first-contact w robot :except (list bottle))))
+        (is (eql kitchen (third contact)) "~s" contact)
+        (dolist (allowed (list '((:any :any :any)) (append filler '((:any :any :any)))
+                               `((:any ,kitchen :any) (:any ,bottle :any))))
+          (is (null (cram-native:object-first-contact w robot :allowed allowed))))
+        (is (eql kitchen (third (cram-native:object-first-contact w robot :except (list bottle)
+                                                                          :allowed filler))))
+        (is (null (cram-native:object-first-contact w robot :except (list bottle kitchen)
+                                                            :allowed filler)))
+        (signals error (cram-native:object-first-contact w robot :except '(:iai-kitchen)))))))
+
 (defun stand-at-the-grasp-pose ()
   "Park the arms, drive the robot to *GRASP-BASE-POSE* and raise its torso to 0.3."
   (urdf-proj:with-simulated-robot

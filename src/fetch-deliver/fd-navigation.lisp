@@ -60,7 +60,11 @@ second value: whether it keeps anything."
 (defun robot-joints-key ()
   "The robot's joint positions as integers (1e-4), for the verdict cache: a verdict holds only
 for the arms, torso and grippers it was found with."
-  (mapcar (lambda (joint) (rounded (cdr joint))) (btr:joint-states (btr:get-robot-object))))
+  (let ((robot (btr:get-robot-object)))
+    (map 'list (lambda (x) (round (* (the double-float x) 1d4)))
+         (the (simple-array double-float (*))
+              (cram-native:robot-joints (btr:world-handle (btr:world robot))
+                                        (btr:object-handle robot))))))
 
 (defun judge-base-pose (pose accept what)
   "(values accepted hits) for the robot standing at POSE: HITS, what it touches there, and
