@@ -102,8 +102,8 @@ ALLOWED covers, a list of (link other other-link) with :ANY for any."
                                    (sb-sys:sap+ pv (* 4 (+ nex nskip))) (floor nal 3) pout)))
                  (list (aref out 0) (aref out 1) (aref out 2) (aref out 3))))))
       (if (<= size 4096)
-          (let ((v (make-array size :element-type '(signed-byte 32))))
-            (declare (dynamic-extent v))
+          (let ((v (make-array 4096 :element-type '(signed-byte 32))))
+            (declare (dynamic-extent v))           ; on the stack: of constant size
             (check v))
           (check (make-array size :element-type '(signed-byte 32)))))))
 

@@ -175,12 +175,14 @@ DVEC, 4 per link in index order."
     (with-vector-pointers ((p v)) (ccall "cn_robot_link_colors" world robot p n))
     v))
 
-(defun robot-link-aabbs (world robot)
+(defun robot-link-aabbs (world robot &optional out)
   "The axis-aligned bounding box of every link of the articulated ROBOT (as OBJECT-AABB gives
-each), as one DVEC, 6 per link in index order: min x y z, max x y z."
+each), as one DVEC (or into OUT), 6 per link in index order: min x y z, max x y z."
   (let* ((n (ccall "cn_robot_num_links" world robot))
-         (v (make-dvec (* 6 n))))
+         (v (or out (make-dvec (* 6 n)))))
     (declare (type dvec v))
+    (unless (>= (length v) (* 6 n))
+      (arg-error 'robot-link-aabbs "output of ~d doubles for ~d links" (length v) n))
     (with-vector-pointers ((p v)) (ccall "cn_robot_link_aabbs" world robot p n))
     v))
 

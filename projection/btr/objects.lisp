@@ -205,13 +205,20 @@ only when a message is made."
     (values (cl-transforms:make-3d-vector (aref b 0) (aref b 1) (aref b 2))
             (cl-transforms:make-3d-vector (aref b 3) (aref b 4) (aref b 5)))))
 
-(defun link-aabbs (object)
+(defun link-aabbs (object &optional out)
   "The axis-aligned bounding box of every link of the articulated OBJECT, as AABB gives each,
-in one vector of doubles: min x y z, max x y z of link index 0, then of link 1, and so on."
+in one vector of doubles: min x y z, max x y z of link index 0, then of link 1, and so on (into
+OUT, a double vector of at least 6 times LINK-COUNT, when given)."
   (unless (typep object 'robot-object)
     (btr-fail "LINK-AABBS: ~s is not an articulated object" object))
   (with-live-object (object 'link-aabbs)
-    (native:robot-link-aabbs (whandle object) (object-handle object))))
+    (native:robot-link-aabbs (whandle object) (object-handle object) out)))
+
+(defun link-count (object)
+  "The number of links of the articulated OBJECT."
+  (unless (typep object 'robot-object)
+    (btr-fail "LINK-COUNT: ~s is not an articulated object" object))
+  (length (km-link-names (%model object))))
 
 (defun local-aabb (object &optional link)
   "The box of OBJECT's shapes (or its LINK index's) in its own frame, as (values min-vector

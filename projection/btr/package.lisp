@@ -24,7 +24,7 @@
    #:bullet-world #:destroy-world
    ;; objects
    #:item #:robot-object #:rigid-body #:rigid-bodies #:name #:pose #:object-pose
-   #:item-type #:item-types #:object-type #:aabb #:link-aabbs #:local-aabb #:bounding-box #:object-color #:link-colors
+   #:item-type #:item-types #:object-type #:aabb #:link-aabbs #:link-count #:local-aabb #:bounding-box #:object-color #:link-colors
    #:collision-group-bits #:call-without-collisions #:*mesh-files* #:*all-meshes-as-compound* #:add-objects-to-mesh-list
    #:register-ros-package #:ros-package-directory #:define-object-kind #:object-kind-keys #:btr-error
    ;; the costmap visualization
