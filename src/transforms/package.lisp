@@ -59,7 +59,8 @@
    #:copy-point-stamped
    #:frame-id #:child-frame-id #:stamp #:normalize-frame-name
    ;; the transformer
-   #:transformer #:set-transform #:defer-update #:with-transforms-batch #:lookup-transform #:can-transform #:wait-for-transform
+   #:transformer #:set-transform #:defer-update #:with-transforms-batch #:lookup-transform
+   #:can-transform #:wait-for-transform
    #:transform-pose-stamped #:transform-point-stamped #:clear #:frame-exists #:known-frames
    #:transform-stamped-error #:tf-lookup-error #:tf-connectivity-error #:tf-extrapolation-error
    #:transform-stamped-error-target-frame #:transform-stamped-error-source-frame))
