@@ -111,12 +111,21 @@ table name → value. All joints are set at once, then links and attached object
                                        (t (btr-fail "joint state ~s, expected (name value)" e))))
                                joint-states)))))
     (let ((indices (make-array (length pairs) :element-type '(signed-byte 32)))
-          (values (make-array (length pairs) :element-type 'double-float)))
+          (values (make-array (length pairs) :element-type 'double-float))
+          (names (km-joint-names (%model robot)))
+          (next 0))
+      (declare (type simple-vector names) (type fixnum next))
       (loop for (n . v) in pairs for i from 0
             do (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
                (unless (and (finite-real-p v) (< (abs v) 1d6))
                  (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
-               (let ((index (joint-index robot n)))
+               ;; the names of a whole state (JOINT-STATES) are the model's own strings, in its
+               ;; order: found a few places after the last one without hashing the name
+               (let ((index (or (loop for k of-type fixnum from next
+                                        below (min (length names) (+ next 8))
+                                      when (eq n (svref names k)) return k)
+                                (joint-index robot n))))
+                 (setf next (1+ index))
                  (setf (aref indices i) index
                        (aref values i) (clamp-to-joint-limits robot n (to-double v) index))))
       (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
