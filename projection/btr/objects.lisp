@@ -214,12 +214,6 @@ OUT, a double vector of at least 6 times LINK-COUNT, when given)."
   (with-live-object (object 'link-aabbs)
     (native:robot-link-aabbs (whandle object) (object-handle object) out)))
 
-(defun link-count (object)
-  "The number of links of the articulated OBJECT."
-  (unless (typep object 'robot-object)
-    (btr-fail "LINK-COUNT: ~s is not an articulated object" object))
-  (length (km-link-names (%model object))))
-
 (defun local-aabb (object &optional link)
   "The box of OBJECT's shapes (or its LINK index's) in its own frame, as (values min-vector
 max-vector): the axis-aligned box an unturned copy of it standing at the origin would have."

@@ -25,6 +25,12 @@
 
 (defun link-names (robot) "The link names of ROBOT (URDF order)." (coerce (km-link-names (%model robot)) 'list))
 
+(defun link-count (object)
+  "The number of links of the articulated OBJECT."
+  (unless (typep object 'robot-object)
+    (btr-fail "LINK-COUNT: ~s is not an articulated object" object))
+  (length (km-link-names (%model object))))
+
 (defun joint-names (robot)
   "The movable joint names of ROBOT (revolute, continuous, prismatic; URDF order)."
   (loop for n across (km-joint-names (%model robot))
