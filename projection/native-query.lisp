@@ -86,26 +86,19 @@ ALLOWED covers, a list of (link other other-link) with :ANY for any."
            allowed))
   (let* ((th (real-arg threshold 'object-first-contact "threshold"))
          (nex (length except)) (nskip (length skip-links)) (nal (* 3 (length allowed)))
-         (size (+ nex nskip nal)))
-    (flet ((check (v)
-             ;; V: the three lists one after the other
-             (declare (type (simple-array (signed-byte 32) (*)) v))
-             (let ((out (make-array 4 :element-type '(signed-byte 32))))
-               (declare (dynamic-extent out))
-               (fill-int-vector v except "object to leave out")
-               (fill-int-vector v skip-links "link to leave out" nex)
-               (let ((i (+ nex nskip)))
-                 (dolist (triple allowed) (setf i (fill-int-vector v triple "allowed contact" i))))
-               (when (= 1 (with-vector-pointers ((pv v) (pout out))
-                            (ccall "cn_object_first_contact" world object th
-                                   pv nex (sb-sys:sap+ pv (* 4 nex)) nskip
-                                   (sb-sys:sap+ pv (* 4 (+ nex nskip))) (floor nal 3) pout)))
-                 (list (aref out 0) (aref out 1) (aref out 2) (aref out 3))))))
-      (if (<= size 4096)
-          (let ((v (make-array 4096 :element-type '(signed-byte 32))))
-            (declare (dynamic-extent v))           ; on the stack: of constant size
-            (check v))
-          (check (make-array size :element-type '(signed-byte 32)))))))
+         (out (make-array 4 :element-type '(signed-byte 32))))
+    (declare (dynamic-extent out))
+    ;; the three lists one after the other
+    (with-scratch-vector (v (+ nex nskip nal) (signed-byte 32) 4096)
+      (fill-int-vector v except "object to leave out")
+      (fill-int-vector v skip-links "link to leave out" nex)
+      (let ((i (+ nex nskip)))
+        (dolist (triple allowed) (setf i (fill-int-vector v triple "allowed contact" i))))
+      (when (= 1 (with-vector-pointers ((pv v) (pout out))
+                   (ccall "cn_object_first_contact" world object th
+                          pv nex (sb-sys:sap+ pv (* 4 nex)) nskip
+                          (sb-sys:sap+ pv (* 4 (+ nex nskip))) (floor nal 3) pout)))
+        (list (aref out 0) (aref out 1) (aref out 2) (aref out 3))))))
 
 (defun closest-distance (world object-a object-b &key (link-a -1) (link-b -1) (max-distance 1d0))
   "Closest distance between OBJECT-A and OBJECT-B (or the given links), searched up to

@@ -43,7 +43,7 @@ runs again with room for all of them (the household's checks report up to about 
 (defun %sweep-records (fn)
   "Call FN with (ints doubles cap) until its records fit; return them as a list of
 (moving-object moving-link hit-object hit-link fraction point), POINT a DVEC of 3. The first
-call's buffers are on the stack."
+call's buffers are on the stack when *SWEEP-RECORD-CAPACITY* is at most 128."
   (flet ((try (iv dv cap)
            (declare (type (simple-array (signed-byte 32) (*)) iv) (type dvec dv) (type fixnum cap))
            (let ((n (with-vector-pointers ((pi4 iv) (pd dv)) (funcall fn pi4 pd cap))))
@@ -55,20 +55,12 @@ call's buffers are on the stack."
                                               (subseq dv (+ 1 (* 4 i)) (+ 4 (* 4 i))))))
                      n))))
     (let ((cap *sweep-record-capacity*))
-      (multiple-value-bind (records n)
-          (if (<= cap 128)
-              (let ((iv (make-array 512 :element-type '(signed-byte 32)))
-                    (dv (make-array 512 :element-type 'double-float)))
-                (declare (dynamic-extent iv dv))
-                (try iv dv cap))
-              (try (make-array (* 4 cap) :element-type '(signed-byte 32)) (make-dvec (* 4 cap)) cap))
-        (if (<= n cap)
-            records
-            (loop (setf cap n)
-                  (multiple-value-setq (records n)
-                    (try (make-array (* 4 cap) :element-type '(signed-byte 32))
-                         (make-dvec (* 4 cap)) cap))
-                  (when (<= n cap) (return records))))))))
+      (loop (multiple-value-bind (records n)
+                (with-scratch-vector (iv (* 4 cap) (signed-byte 32) 512)
+                  (with-scratch-vector (dv (* 4 cap) double-float 512)
+                    (try iv dv cap)))
+              (when (<= n cap) (return records))
+              (setf cap n))))))
 
 (defun %sweep-flags (skip-start-contacts &optional reference)
   (logior (if skip-start-contacts 1 0) (if reference 2 0)))

@@ -6,7 +6,7 @@
   (:export
    ;; errors and the library
    #:native-error #:native-error-function #:native-error-code #:native-error-message
-   #:with-float-traps-masked* #:library-directory #:native-version
+   #:with-float-traps-masked* #:library-directory #:native-version #:with-scratch-vector
    #:add-package-path #:add-search-dir #:clear-search-paths #:resolve-path
    ;; worlds
    #:make-world #:destroy-world #:copy-world #:world-alive-p #:world-count
@@ -142,6 +142,23 @@ duration of every call and restores the caller's modes on return."
   `(sb-sys:with-pinned-objects ,(mapcar #'second bindings)
      (let ,(mapcar (lambda (b) `(,(first b) (sb-sys:vector-sap ,(second b)))) bindings)
        ,@body)))
+
+(defmacro with-scratch-vector ((var length element-type stack-length) &body body)
+  "Run BODY with VAR bound to a fresh simple vector of ELEMENT-TYPE (unevaluated) with room for
+at least LENGTH elements: one of STACK-LENGTH (a constant) on the stack when LENGTH fits, else
+one of LENGTH on the heap. SBCL puts a DYNAMIC-EXTENT array on the stack only when its size is
+a constant and it is under 32 KB. BODY must not keep VAR, nor read past LENGTH."
+  (let ((n (gensym "LENGTH")) (fn (gensym "BODY")) (v (gensym "V")))
+    `(let ((,n ,length))
+       (flet ((,fn (,var)
+                (declare (type (simple-array ,element-type (*)) ,var))
+                ,@body))
+         (declare (dynamic-extent #',fn))
+         (if (<= ,n ,stack-length)
+             (let ((,v (make-array ,stack-length :element-type ',element-type)))
+               (declare (dynamic-extent ,v))
+               (,fn ,v))
+             (,fn (make-array ,n :element-type ',element-type)))))))
 
 (defun make-dvec (n)
   (make-array n :element-type 'double-float :initial-element 0d0))

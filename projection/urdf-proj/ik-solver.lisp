@@ -181,7 +181,6 @@ only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and 
                 (map 'dvec (lambda (a b) (* 0.5d0 (+ a b))) (ik-chain-lower chain) (ik-chain-upper chain))))
          (pt (coerce position-tolerance 'double-float))
          (rt (coerce rotation-tolerance 'double-float))
-         (goal nil)
          (best-p 1d300) (best-r 1d300))
     (sb-thread:with-mutex ((ik-chain-lock chain))
       (when (and use-native (ik-chain-native chain))
@@ -195,11 +194,11 @@ only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and 
           (if *ik-fallback-restarts*
               (setf max-restarts (min max-restarts *ik-fallback-restarts*))
               (return-from solve-ik (values nil (aref err 0) (aref err 1))))))
-      (dotimes (attempt (1+ max-restarts))
-        (let ((start (if (zerop attempt) q (random-configuration chain random-state)))
-              ;; the goal as the Lisp solver takes it: made here, when the native one failed
-              (goal (or goal (setf goal (transform->12 (cl-transforms:pose->transform goal-pose))))))
-          (multiple-value-bind (ok pe re) (ik-attempt chain goal start pt rt *ik-max-iterations*)
-            (when (< (+ pe re) (+ best-p best-r)) (setf best-p pe best-r re))
-            (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re)))))))
+      ;; the Lisp solver, when the native one failed or is not used; the goal as it takes it
+      (let ((goal (transform->12 (cl-transforms:pose->transform goal-pose))))
+        (dotimes (attempt (1+ max-restarts))
+          (let ((start (if (zerop attempt) q (random-configuration chain random-state))))
+            (multiple-value-bind (ok pe re) (ik-attempt chain goal start pt rt *ik-max-iterations*)
+              (when (< (+ pe re) (+ best-p best-r)) (setf best-p pe best-r re))
+              (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re))))))))
     (values nil best-p best-r)))

@@ -174,9 +174,10 @@ each other articulated object whose joints or pose changed since the last captur
 with FORCE). A capture while SNAPSHOT is pending adds to it: what it has not written is kept
 unless captured anew."
   (let* ((robot (robot-object world))
-         (odom (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
+         (frame (fact-value '?frame `(rob-int:robot-odom-frame ,(robot-name) ?frame)))
          (root (cl-urdf:name (cl-urdf:root-link (btr:urdf robot))))
-         (odom (and odom (not (string= odom root)) (not (btr:link-exists-p robot odom)) odom))
+         ;; an odom frame of its own, between the map and the robot's root link
+         (odom (and frame (not (string= frame root)) (not (btr:link-exists-p robot frame)) frame))
          (signatures (or *environment-tf-signatures* (make-hash-table :test 'eq)))
          (size (* 7 (length (link-layout-names (link-layout robot)))))
          (poses (tf-snapshot-robot-poses snapshot)))
@@ -239,12 +240,9 @@ next read or written (CL-TF:DEFER-UPDATE): after each motion, TF costs nothing u
 looks something up. Returns TRANSFORMER."
   (sb-thread:with-recursive-lock (*motion-lock*)
     (cl-transforms-stamped:with-transforms-batch (transformer)
-      (let* ((snapshot (tf-snapshot transformer))
-             (pending (tf-snapshot-pending snapshot)))
-        (capture-tf snapshot world force)
-        (unless pending
-          (cl-transforms-stamped:defer-update transformer
-                                              (lambda () (write-tf snapshot transformer)))))))
+      (let ((snapshot (capture-tf (tf-snapshot transformer) world force)))
+        (cl-transforms-stamped:defer-update transformer
+                                            (lambda () (write-tf snapshot transformer))))))
   transformer)
 
 ;;; ---- bookkeeping of every motion ------------------------------------------------------------

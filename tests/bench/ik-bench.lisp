@@ -48,8 +48,7 @@ fresh image are slower, and neither side is measured cold."
       (run-cases warm (lambda (goal seed) (urdf-proj:solve-ik chain goal :seed seed))))
     (run-cases warm (lambda (goal seed)
                       (cram-native:chain-ik (urdf-proj::ik-chain-native chain)
-                                            (btr::pose->vector goal) :seed seed :max-restarts 30)))
-    t))
+                                            (btr::pose->vector goal) :seed seed :max-restarts 30)))))
 
 (define-benchmark ik ()
   (let* ((btr:*current-bullet-world* (make-pr2-world))
@@ -57,8 +56,8 @@ fresh image are slower, and neither side is measured cold."
     (dolist (arm '(:left :right))
       (let* ((chain (urdf-proj:arm-ik-chain arm robot))
              (cases (cases chain *poses-per-arm* (if (eq arm :left) 101 202)))
-             (warmed (warm-up chain arm))
              (ours (let ((urdf-proj:*ik-random-state* (sb-ext:seed-random-state 7)))
+                     (warm-up chain arm)
                      (run-cases cases (lambda (goal seed)
                                         (urdf-proj:solve-ik chain goal :seed seed)))))
              (native (let ((n 0))
@@ -68,7 +67,6 @@ fresh image are slower, and neither side is measured cold."
                                                                 :seed seed :max-restarts 30
                                                                 :random-seed (incf n))))))
              (rate (/ (first ours) (float (length cases)))))
-        (declare (ignorable warmed))
         (add-row (format nil "PR2 ~(~a~) arm IK, ~d random reachable poses (1 mm / 0.01 rad): ~
                               solved ~,1f % (bare native solver ~,1f %)"
                          arm (length cases) (* 100 rate)
