@@ -139,6 +139,39 @@
     (is (eq d2 (desig:newest-effective-designator d1)))
     (is (eq :some-data (desig:reference d3)))))
 
+(test equate-joins-walked-chains
+  ;; the ends of both chains are asked for (from every member) before and after they are
+  ;; joined, so that shortcuts remembered before the join must not mislead after it
+  (flet ((chain (n type)
+           (let ((ds (loop repeat n collect (desig:make-designator :object (list (list :type type))))))
+             (loop for (a b) on ds while b do (desig:equate a b))
+             ds)))
+    (let ((as (chain 5 :cup)) (bs (chain 4 :bowl)))
+      (dolist (d as) (is (eq (first as) (desig:first-desig d))) (is (eq (car (last as)) (desig:current-desig d))))
+      (dolist (d bs) (is (eq (first bs) (desig:first-desig d))) (is (eq (car (last bs)) (desig:current-desig d))))
+      (is (not (desig:desig-equal (third as) (second bs))))
+      ;; a middle member of each: B's chain goes behind A's newest
+      (desig:equate (second as) (third bs))
+      (let ((all (append as bs)))
+        (dolist (d all)
+          (is (eq (first as) (desig:first-desig d)))
+          (is (eq (car (last bs)) (desig:current-desig d)))
+          (is (desig:desig-equal d (first all))))
+        (is (equal all (desig:get-equal-designators (fourth bs))))
+        (is (eq (car (last as)) (desig:parent (first bs))))
+        (signals error (desig:equate (first bs) (third as)))
+        ;; a third chain behind the joined one, asked from its oldest member
+        (let ((c (desig:an object (type :spoon))))
+          (desig:equate (first as) c)
+          (is (eq c (desig:current-desig (first as))))
+          (is (eq (first as) (desig:first-desig c)))
+          (is (= 10 (length (desig:get-equal-designators c)))))))
+    ;; a chain grown one solution at a time, as NEXT-SOLUTION grows it, stays in order
+    (let* ((ds (chain 3000 :plate)))
+      (is (eq (first ds) (desig:first-desig (car (last ds)))))
+      (is (eq (car (last ds)) (desig:current-desig (first ds))))
+      (is (= 3000 (length (desig:get-equal-designators (nth 1500 ds))))))))
+
 ;;; Object designators
 
 (test object-reference

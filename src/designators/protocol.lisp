@@ -99,6 +99,10 @@ ERRORP, an unknown type signals an error listing the known types; otherwise NIL.
    (quantifier :initarg :quantifier :initform :a :reader quantifier)
    (parent :initform nil :reader parent)
    (successor :initform nil :reader successor)
+   ;; shortcuts along the chain: NIL, or a designator of the same chain older (FIRST-HINT) or
+   ;; younger (LAST-HINT) than this one, which was the chain's first or newest when it was set
+   (first-hint :initform nil)
+   (last-hint :initform nil)
    (data :initform nil :reader designator-data)
    (effective :initform nil :reader effective)
    (timestamp :initform (now-unix) :reader timestamp)
@@ -283,17 +287,28 @@ with a qualifier naming them: (defmethod on-equate-designators my-name (s p) ...
 list of the handlers' values.")
   (:method no-handler ((successor designator) (parent designator)) nil))
 
+(defmacro %chain-end (designator link hint)
+  "The designator at the end of DESIGNATOR's chain that following LINK (PARENT or SUCCESSOR)
+reaches, by the HINT slots (which only point that way along the same chain) where set; the
+hint of DESIGNATOR is then set to it, so that the next walk is one step."
+  `(let ((start ,designator))
+     (let ((d start))
+       (loop (let ((hint (slot-value d ',hint)))
+               (cond (hint (setf d hint))
+                     ((,link d) (setf d (,link d)))
+                     (t (return)))))
+       (unless (eq d start) (setf (slot-value start ',hint) d))
+       d)))
+
 (defun first-desig (designator)
   "The oldest designator of DESIGNATOR's equation chain."
   (check-designator designator 'first-desig)
-  (loop for d = designator then (parent d)
-        when (null (parent d)) return d))
+  (%chain-end designator parent first-hint))
 
 (defun current-desig (designator)
   "The newest designator of DESIGNATOR's equation chain."
   (check-designator designator 'current-desig)
-  (loop for d = designator then (successor d)
-        when (null (successor d)) return d))
+  (%chain-end designator successor last-hint))
 
 (defun desig-equal (designator-1 designator-2)
   "True when the two designators belong to the same equation chain."
@@ -310,10 +325,15 @@ two designators that are already equal is an error."
       (when (desig-equal parent successor)
         (error "Cannot equate ~s with ~s: they are already in the same equation chain."
                successor parent))
-      (setf youngest (current-desig parent)
-            oldest (first-desig successor))
-      (setf (slot-value youngest 'successor) oldest
-            (slot-value oldest 'parent) youngest))
+      (let ((first (first-desig parent))
+            (newest (current-desig successor)))
+        (setf youngest (current-desig parent)
+              oldest (first-desig successor))
+        (setf (slot-value youngest 'successor) oldest
+              (slot-value oldest 'parent) youngest
+              ;; the joined chain's ends, for the two that are no longer ends
+              (slot-value oldest 'first-hint) first
+              (slot-value youngest 'last-hint) newest)))
     (on-equate-designators successor parent)
     successor))
 
