@@ -145,6 +145,33 @@ digits) left out."
           (let ((at (or (mismatch (third five) (third again)) 0)))
             (subseq (third five) (max 0 (- at 200)) (min (length (third five)) (+ at 200))))))))
 
+(test passing-over-blocked-base-offsets-changes-no-run
+  ;; MOVE-TCP's search passes over the candidates of base offsets where the base touches
+  ;; something; the run it makes is the one that solving each of them makes, entry by entry
+  (let ((passed 0))
+    (flet ((run-once (pass-over)
+             (btw-tut:init-projection)
+             ;; the plan's threads see the global value
+             (setf urdf-proj::*pass-over-blocked-bases* pass-over)
+             (unwind-protect
+                  (multiple-value-bind (result log)
+                      (run-quietly (lambda () (demos:household-demo :object-list '(:bowl) :seed 1)))
+                    (list result (object-position :bowl) (log-without-times log)))
+               (setf urdf-proj::*pass-over-blocked-bases* t))))
+      (sb-int:encapsulate 'urdf-proj::pass-over-ik 'count-passes
+                          (lambda (f &rest args) (incf passed) (apply f args)))
+      (unwind-protect
+           (destructuring-bind (ra a la) (run-once t)
+             (is (< 0 passed) "no candidate was passed over")
+             (let ((before passed))
+               (destructuring-bind (rb b lb) (run-once nil)
+                 (is (= before passed) "candidates were passed over with the check off")
+                 (is (equal ra rb))
+                 (is (< (cl-transforms:v-dist a b) 1d-6))
+                 (is (string= la lb) "the logs differ first at ~d of ~d characters"
+                     (mismatch la lb) (length la)))))
+        (sb-int:unencapsulate 'urdf-proj::pass-over-ik 'count-passes)))))
+
 (test varied-kitchen-moves-the-dining-table
   (btw-tut:init-projection)
   (let ((before (cl-transforms:origin (btr:link-pose (btr:get-environment-object)

@@ -425,6 +425,36 @@ are; the seed replay of the tutorial covers it), and a warning names the frame o
       (is (< (abs (- (cl-transforms:x (cl-transforms:origin (btr:pose bottle))) -1.6d0)) 0.02))
       (btr-utils:kill-object 'respawn-bottle))))
 
+(test tcp-in-ee-transform-kept-within-a-check
+  "TCP-IN-EE-TRANSFORM reads the PR2's rule (a special variable) on every call, except inside
+WITH-TCP-IN-EE-KEPT, which keeps each arm's answer for its extent."
+  (with-kitchen
+    (let* ((variable (find-symbol "*TCP-IN-EE-POSE*" :cram-pr2-description))
+           (original (symbol-value variable))
+           (longer (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.2d0 0 0)
+                                            (cl-transforms:make-identity-rotation))))
+      (flet ((x-of (arm) (cl-transforms:x (cl-transforms:translation
+                                           (urdf-proj::tcp-in-ee-transform arm)))))
+        (is (< (abs (- 0.18d0 (x-of :left))) 1d-6))
+        (multiple-value-bind (transform inverse) (urdf-proj::tcp-in-ee-transform :right)
+          (is (< (abs (+ 0.18d0 (cl-transforms:x (cl-transforms:translation inverse)))) 1d-6))
+          (is (< (abs (- 0.18d0 (cl-transforms:x (cl-transforms:translation transform)))) 1d-6)))
+        (unwind-protect
+             (progn
+               (urdf-proj::with-tcp-in-ee-kept
+                 (is (< (abs (- 0.18d0 (x-of :left))) 1d-6))
+                 (setf (symbol-value variable) longer)
+                 ;; kept inside, for the arm asked before; read afresh for the other
+                 (is (< (abs (- 0.18d0 (x-of :left))) 1d-6))
+                 (is (< (abs (- 0.2d0 (x-of :right))) 1d-6))
+                 (urdf-proj::with-tcp-in-ee-kept
+                   (is (< (abs (- 0.18d0 (x-of :left))) 1d-6))))
+               ;; outside, the rule is read again
+               (is (< (abs (- 0.2d0 (x-of :left))) 1d-6)))
+          (setf (symbol-value variable) original))
+        (is (< (abs (- 0.18d0 (x-of :left))) 1d-6))
+        (signals error (urdf-proj::tcp-in-ee-transform :middle))))))
+
 (test robot-fact-answers-follow-the-database
   "The kept answers to robot fact queries change as soon as the facts change; queries over rules
 that read Lisp state are not kept."

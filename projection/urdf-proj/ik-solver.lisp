@@ -202,3 +202,13 @@ only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and 
               (when (< (+ pe re) (+ best-p best-r)) (setf best-p pe best-r re))
               (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re))))))))
     (values nil best-p best-r)))
+
+(defun pass-over-ik (chain &optional (random-state *ik-random-state*))
+  "Draw from RANDOM-STATE what SOLVE-IK draws for CHAIN, without solving, when that does not
+depend on the outcome: CHAIN has a native solver (SOLVE-IK draws one number for it, whether it
+solves the goal or not) and no *IK-FALLBACK-RESTARTS* follow a failure. For a candidate that
+is known to fail anyway, so that every later IK call draws what it would have. True when
+drawn; NIL (nothing drawn) when the draws would depend on the outcome."
+  (when (and (ik-chain-native chain) (null *ik-fallback-restarts*))
+    (random #.(expt 2 32) random-state)
+    t))

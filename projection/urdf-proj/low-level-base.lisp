@@ -114,6 +114,20 @@ at the first contact that counts."
             ((btr::object-by-handle world (third contact)) t)
             (t (not (null (robot-collisions :world world :robot robot :ignore-links ignore-links))))))))
 
+(defun other-links-collide-p (robot skip-links &key (world btr:*current-bullet-world*))
+  "True when a link of ROBOT other than those of the link indices SKIP-LINKS touches a body the
+belief state knows, in a contact that ROBOT-COLLIDES-P counts (the planes and the robot's
+attached objects aside, intended contacts allowed): ROBOT-COLLIDES-P is then true however the
+joints that move only SKIP-LINKS are set."
+  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
+    (declare (ignore attached))
+    (let ((contact (cram-native:object-first-contact
+                    (btr::world-handle world) (btr:object-handle robot)
+                    :except (mapcar #'btr:object-handle (append planes attached-objects))
+                    :skip-links skip-links
+                    :allowed (allowed-contact-triples world robot (intended-contacts robot)))))
+      (and contact (btr::object-by-handle world (third contact)) t))))
+
 ;;; ---- navigation ---------------------------------------------------------------------------------
 
 (defvar *warned-navigation-frames* '()

@@ -65,13 +65,14 @@ CHAIN's first joint) than the chain reaches, with 5 cm to spare."
           (dz (- (aref origin 2) (float (cl-transforms:z point) 1d0))))
       (> (+ (* dx dx) (* dy dy) (* dz dz)) (* limit limit)))))
 
-(defun chain-ik-from-map (chain ee first-child ee-map-pose robot seed max-restarts)
-  "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
-the child link of the chain's first joint FIRST-CHILD."
+(defun chain-ik-goal (chain ee first-child ee-map-pose robot)
+  "The goal of CHAIN's tip (a pose in the chain's base link frame) that puts ROBOT's
+end-effector link EE at EE-MAP-POSE, or NIL when the goal lies beyond the chain's reach from
+the child link of its first joint FIRST-CHILD (quick checks, before anything is solved)."
   (when (and (string= ee (ik-chain-tip-link chain))
              (beyond-chain-reach-p chain first-child (cl-transforms:origin ee-map-pose) robot))
     ;; the quick distance check before anything else is computed
-    (return-from chain-ik-from-map nil))
+    (return-from chain-ik-goal nil))
   (let* ((base-pose (btr:link-pose robot (ik-chain-base-link chain)))
          ;; the chain ends at the wrist; the end-effector link is the wrist or hangs below it
          (tip (ik-chain-tip-link chain))
@@ -80,16 +81,21 @@ the child link of the chain's first joint FIRST-CHILD."
                        (cl-transforms:transform* (cl-transforms:pose->transform ee-map-pose)
                                                  (relative-transform (btr:link-pose robot ee)
                                                                      (btr:link-pose robot tip)))))
-         (goal (cl-transforms:transform->pose
-                (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
-                                          tip-goal)))
          (first-joint-origin (cl-transforms:origin (btr:link-pose robot first-child))))
-    (when (> (cl-transforms:v-dist first-joint-origin (cl-transforms:translation tip-goal))
-             (+ (ik-chain-reach chain) 0.05d0))
-      (return-from chain-ik-from-map nil))
-    (solve-ik chain goal :seed (or seed (map 'list (lambda (j) (btr:joint-state robot j))
-                                             (ik-chain-joint-names chain)))
-                         :max-restarts max-restarts)))
+    (unless (> (cl-transforms:v-dist first-joint-origin (cl-transforms:translation tip-goal))
+               (+ (ik-chain-reach chain) 0.05d0))
+      (cl-transforms:transform->pose
+       (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
+                                 tip-goal)))))
+
+(defun chain-ik-from-map (chain ee first-child ee-map-pose robot seed max-restarts)
+  "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
+the child link of the chain's first joint FIRST-CHILD."
+  (let ((goal (chain-ik-goal chain ee first-child ee-map-pose robot)))
+    (when goal
+      (solve-ik chain goal :seed (or seed (map 'list (lambda (j) (btr:joint-state robot j))
+                                               (ik-chain-joint-names chain)))
+                           :max-restarts max-restarts))))
 
 (defun check-collision-mode (mode)
   (unless (member mode *collision-modes*)
@@ -166,7 +172,7 @@ again only when *BASE-OFFSETS* changed), or only (0 0) without MOVE-BASE. Not to
 (defun tcp->ee-pose (arm tcp-map-pose robot)
   (cl-transforms:transform->pose
    (cl-transforms:transform* (cl-transforms:pose->transform tcp-map-pose)
-                             (cl-transforms:transform-inv (tcp-in-ee-transform arm robot)))))
+                             (nth-value 1 (tcp-in-ee-transform arm robot)))))
 
 (defparameter *goal-bound-penetration* 0.001d0
   "Metres a link that the tool goal fixes must reach into the world, beyond what the IK can
@@ -290,6 +296,36 @@ CHAIN-IK-FROM-MAP's own check; true otherwise."
                               (type (simple-array double-float (*)) s))
                      (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* limit limit))))))
 
+(defparameter *pass-over-blocked-bases* t
+  "When true, MOVE-TCP's search under the strict collision check, for one goal, passes over the
+candidates of a base offset at which a link that only the base moves (the base, its wheels and
+sensors) touches something, instead of solving their IK and finding each in collision: once
+the goal is known not to be blocked at the hand (GOAL-BOUND-COLLISION-P), and with a native IK
+solver (PASS-OVER-IK). The search finds what it finds without it. NIL: every candidate is
+solved.")
+
+(defvar *reach-moving-links* '()
+  "REACH-MOVING-LINKS' answers, entries (urdf chain torso . link-indices).")
+
+(defun reach-moving-links (robot chain torso)
+  "The link indices of ROBOT that the candidates of REACH-TCP-POSES for the IK CHAIN move: the
+links below the chain's first joint and, with a TORSO joint, below it. The other links move
+only with the base."
+  (let ((urdf (btr:urdf robot)))
+    (or (loop for (u c j . links) in *reach-moving-links*
+              when (and (eq u urdf) (eq c chain) (equal j torso)) return links)
+        (let* ((torso-joint (and torso (gethash torso (cl-urdf:joints urdf))))
+               (names (append (link-descendants robot (first-joint-child chain robot))
+                              (and torso-joint
+                                   (link-descendants robot (cl-urdf:name (cl-urdf:child torso-joint))))))
+               (links (sort (remove-duplicates (remove nil (mapcar (lambda (l) (robot-link-index robot l))
+                                                                    names)))
+                            #'<)))
+          (push (list* urdf chain torso links) *reach-moving-links*)
+          (when (> (length *reach-moving-links*) 16)
+            (setf *reach-moving-links* (subseq *reach-moving-links* 0 16)))
+          links))))
+
 (defun reach-tcp-poses (goals collision-mode move-base fixed-torso)
   "Bring each (arm . tcp-map-pose) of GOALS there at once. Tries base offsets and torso values
 in order; the first candidate with IK solutions for every arm that passes the collision check
@@ -318,6 +354,15 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                       append (map 'list #'list (ik-chain-joint-names chain) seed)))
          (sweep-start (and *sweep-check* (robot-state-vectors robot)))
          (goal-checked (not (member collision-mode '(nil :avoid-all))))
+         ;; under the strict check, once a goal is known not to be hopeless: a base offset at
+         ;; which a link that only the base moves touches something passes its candidates over
+         ;; (as for one goal with a native solver every IK call draws one random number whatever
+         ;; it finds, passed-over candidates draw it too, and the search goes on as it would)
+         (fixed-links-check (and *pass-over-blocked-bases*
+                                 (not goal-checked)
+                                 (= (length ee-goals) 1)
+                                 (ik-chain-native (third (first ee-goals)))
+                                 (null *ik-fallback-restarts*)))
          (swept nil)
          (goals-key (reach-goals-key goals)))
     (block search
@@ -344,7 +389,8 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
         (let ((shoulders (shoulder-positions robot ee-goals torso torsos)))
          (dolist (offset (base-candidates move-base))
           (let ((shift (base-offset-shift base0 (first offset) (second offset)))
-                (placed nil))
+                (placed nil)
+                (base-blocked :unknown))
            (loop
             for torso-value in torsos
             for torso-shoulders in shoulders
@@ -354,6 +400,16 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
               (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset))
                     placed t))
             (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
+            (if (and fixed-links-check goal-checked
+                     (if (eq base-blocked :unknown)
+                         (setf base-blocked
+                               (other-links-collide-p
+                                robot (reach-moving-links robot (third (first ee-goals)) torso)))
+                         base-blocked))
+                (destructuring-bind (pose chain ee first-child &rest rest) (rest (first ee-goals))
+                  (declare (ignore rest))
+                  (when (chain-ik-goal chain ee first-child pose robot)
+                    (pass-over-ik chain)))
             (let* ((position-error 0d0) (rotation-error 0d0)
                    (solutions (loop for (nil pose chain ee first-child seed) in ee-goals
                                     for (q pe re) = (multiple-value-list
@@ -379,14 +435,16 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                                        (goal-bound-collision-p (mapcar #'third ee-goals) robot
                                                                position-error rotation-error))))
                     (btr:set-robot-state-from-joints arms0 robot)
-                    (when hopeless (return-from candidates)))))))))))
+                    (when hopeless (return-from candidates))))))))))))
       (setf (btr:pose robot) base0)
       (btr:set-robot-state-from-joints state0 robot)
       (report-sweeps swept :robot robot :before sweep-start)  ; signals under :fail
       (cpl:fail 'common-fail:manipulation-pose-unreachable
-                :description (format nil "Tool frame goals ~{~{~(~a~) ~a~}~^, ~}: unreachable for ~
-                                          the end effector or in collision."
-                                     (mapcar (lambda (g) (list (car g) (pose-summary (cdr g)))) goals))))
+                :description (lambda ()
+                               (format nil "Tool frame goals ~{~{~(~a~) ~a~}~^, ~}: unreachable for ~
+                                            the end effector or in collision."
+                                       (mapcar (lambda (g) (list (car g) (pose-summary (cdr g))))
+                                               goals)))))
     ;; final check: the tool frames are where they were asked to be
     (loop for (arm . pose) in goals
           for tool = (tool-frame arm)

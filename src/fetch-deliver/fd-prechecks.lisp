@@ -37,12 +37,13 @@ itself reports them, when it is performed."
   (call-restoring-robot
    (lambda ()
      (handler-case
-         (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
+         (urdf-proj::with-tcp-in-ee-kept
+          (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
                                               urdf-proj::*base-offsets*))
                (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*))
                (urdf-proj:*sweep-check* (and (eq urdf-proj:*sweep-check* :fail) :fail)))
-           (dolist (pose poses t)
-             (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil)))
+            (dolist (pose poses t)
+              (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil))))
        (common-fail:manipulation-low-level-failure () nil)))))
 
 (defun trajectory-reachable-p (arm trajectory labels &key (coarse t))
@@ -138,11 +139,15 @@ left). FIRST (a map pose, a sample of TARGET a pre-check accepted from where the
 is tried before the others; when it passes, the result is a location designator of that pose,
 with T as a second value.
 Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries another base pose."
+  (urdf-proj::with-tcp-in-ee-kept
+    (%check-placing-collisions object arm target first)))
+
+(defun %check-placing-collisions (object arm target first)
   (let ((regrasp (regrasp-check-target-p target)))
     (when first
       (let* ((?pose first) (candidate (desig:a location (pose ?pose))))
         (when (placeable-at-p object arm candidate regrasp)
-          (return-from check-placing-collisions (values candidate t)))))
+          (return-from %check-placing-collisions (values candidate t)))))
     (multiple-value-bind (found best)
         (find-placing-sample (lambda (candidate)
                                (placeable-at-p object arm candidate nil))
@@ -155,7 +160,7 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
                                            (room-left object candidate)))
                              :best (length *places-to-leave*)
                              :require-best *require-room*)
-      (when found (return-from check-placing-collisions found))
+      (when found (return-from %check-placing-collisions found))
       (when *placing-fallback*
         ;; what a check that does not require room would have taken from these samples
         (setf (car *placing-fallback*)

@@ -42,15 +42,26 @@
                 "(no description)"))))
 
 (define-condition low-level-failure (cpl:simple-plan-failure)
-  ((description :initarg :description :initform nil :reader description))
+  ((description :initarg :description :initform nil))
   (:report report-failure)
   (:documentation "The root of failures reported by the robot's low level
 \(process modules, drivers, the projection). DESCRIPTION explains it."))
 
 (define-condition high-level-failure (cpl:simple-plan-failure)
-  ((description :initarg :description :initform nil :reader description))
+  ((description :initarg :description :initform nil))
   (:report report-failure)
   (:documentation "The root of failures of plans above single motions. DESCRIPTION explains it."))
+
+(defun description (condition)
+  "The text explaining CONDITION, a LOW-LEVEL-FAILURE or HIGH-LEVEL-FAILURE (or NIL). Its
+:DESCRIPTION initarg is a string, or a function of no arguments that makes the string when it
+is first asked for (a failure that a check catches and drops then costs no formatting)."
+  (unless (typep condition '(or low-level-failure high-level-failure))
+    (error "COMMON-FAIL:DESCRIPTION: ~s is not a low-level or high-level failure." condition))
+  (let ((text (slot-value condition 'description)))
+    (if (functionp text)
+        (setf (slot-value condition 'description) (funcall text))
+        text)))
 
 ;; In the task tree the class is shown next to the text, so the text is the
 ;; description alone.
@@ -59,9 +70,6 @@
 
 (defmethod cram-language::failure-description ((condition high-level-failure))
   (or (description condition) ""))
-
-(setf (documentation 'description 'function)
-      "The text explaining a LOW-LEVEL-FAILURE or HIGH-LEVEL-FAILURE (or NIL).")
 
 (defmacro define-failures (&rest specs)
   "Each spec is (NAME PARENT DOC): define NAME as a subclass of PARENT."
