@@ -242,16 +242,30 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
     (values (cl-transforms:normalize-vector (v-rotate (cl-transforms:orientation pose) axis))
             (cl-transforms:origin pose))))
 
-(defun plane-projection (v axis)
-  (cl-transforms:v- v (cl-transforms:v* axis (cl-transforms:dot-product v axis))))
-
 (defun signed-angle (from to axis)
-  "The angle about AXIS that turns FROM onto TO, both projected on the plane normal to AXIS."
-  (let ((f (plane-projection from axis)) (v (plane-projection to axis)))
-    (if (or (< (cl-transforms:v-norm f) 1d-9) (< (cl-transforms:v-norm v) 1d-9))
-        0d0
-        (atan (cl-transforms:dot-product axis (cl-transforms:cross-product f v))
-              (cl-transforms:dot-product f v)))))
+  "The angle about AXIS that turns FROM onto TO, both projected on the plane normal to AXIS
+\(PLANE-PROJECTION; computed on the coordinates, in the same operations)."
+  (let ((ax (cl-transforms:x axis)) (ay (cl-transforms:y axis)) (az (cl-transforms:z axis))
+        (fx (cl-transforms:x from)) (fy (cl-transforms:y from)) (fz (cl-transforms:z from))
+        (tx (cl-transforms:x to)) (ty (cl-transforms:y to)) (tz (cl-transforms:z to)))
+    (declare (type double-float ax ay az fx fy fz tx ty tz))
+    (flet ((norm (x y z)
+             (declare (type double-float x y z))
+             (if (< (max (abs x) (abs y) (abs z)) 1d150)
+                 (sqrt (+ (* x x) (* y y) (* z z)))
+                 (cl-transforms:v-norm (cl-transforms:make-3d-vector x y z)))))
+      (let* ((sf (+ (* fx ax) (* fy ay) (* fz az)))
+             (st (+ (* tx ax) (* ty ay) (* tz az)))
+             ;; the projections on the plane
+             (px (- fx (* sf ax))) (py (- fy (* sf ay))) (pz (- fz (* sf az)))
+             (qx (- tx (* st ax))) (qy (- ty (* st ay))) (qz (- tz (* st az))))
+        (declare (type double-float sf st px py pz qx qy qz))
+        (if (or (< (norm px py pz) 1d-9) (< (norm qx qy qz) 1d-9))
+            0d0
+            (atan (+ (* ax (- (* py qz) (* pz qy)))
+                     (* ay (- (* pz qx) (* px qz)))
+                     (* az (- (* px qy) (* py qx))))
+                  (+ (* px qx) (* py qy) (* pz qz))))))))
 
 (defun normalize-angle (a)
   (atan (sin a) (cos a)))
@@ -286,6 +300,7 @@ beyond a limit means)."
                         joints))
          (joint-indices (map '(simple-array (signed-byte 32) (*))
                              (lambda (j) (btr:joint-index robot j)) joints))
+         (index-list (coerce joint-indices 'list))
          ;; the joints' values in the shim as the steps leave them: at first what the zeros
          ;; were set to
          (current (map '(simple-array double-float (*)) (lambda (j) (btr:joint-state robot j))
@@ -298,6 +313,7 @@ beyond a limit means)."
           for largest = 0d0
           do (loop for step in steps
                    for k from 0
+                   for index in index-list
                    do (destructuring-bind (j child axis v) step
                         (setf (aref links 0) child)
                         (cram-native:robot-link-poses-if world handle joint-indices current links
@@ -312,7 +328,7 @@ beyond a limit means)."
                                (new (normalize-angle (+ v delta))))
                           (setf largest (max largest (abs delta))
                                 (fourth step) new
-                                (aref current k) (btr::clamp-to-joint-limits robot j new)))))
+                                (aref current k) (btr::clamp-to-joint-limits robot j new index)))))
           until (< largest 1d-9))
     (cram-native:set-robot-joints world handle joint-indices current)
     (mapcar #'fourth steps)))
