@@ -199,6 +199,19 @@ so that the table holds the goals asked repeatedly only.")
           for slot = (svref recent i)
           when (eq (car slot) goal) return (cdr slot))))
 
+(defun recent-equal-goal-entry (goal extra-vars)
+  "The entry of a goal among **RECENT-GOALS** EQUAL to the list GOAL (a query built afresh
+each time, the same as one asked shortly before), compiled for the same EXTRA-VARS, or NIL."
+  (let ((recent **recent-goals**))
+    (declare (type (simple-vector 16) recent))
+    (loop for i of-type fixnum below 16
+          for slot = (svref recent i)
+          when (and (consp (car slot))
+                    (eq (caar slot) (car goal))
+                    (equal (car slot) goal)
+                    (equal (fourth (cdr slot)) extra-vars))
+            return (cdr slot))))
+
 (defun compiled-goal (goal &optional extra-vars)
   "The goal function, frame and environment of the source GOAL, with variables also for the
 symbols EXTRA-VARS (the pre-bound variables of a query, see COMPILE-GOAL-TERM): compiled once
@@ -213,7 +226,9 @@ compiled for this query."
                                         (let ((recent (and goal (recent-goal-entry goal))))
                                           (when (fits recent)
                                             (setf (gethash goal *compiled-goals*) recent)
-                                            recent)))))
+                                            recent))
+                                        ;; the same query built afresh: not kept in the table
+                                        (and (consp goal) (recent-equal-goal-entry goal extra-vars)))))
                          (when entry
                            (setf **last-compiled-goal** (cons goal entry)))
                          entry)))))

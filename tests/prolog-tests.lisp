@@ -345,6 +345,42 @@ each query's bindings give its own solutions; other pre-bound variables compile 
            (is (equal '((?x . c) (?list . (c))) (first (force-ll (prolog goal '((?list . (c)))))))))
       (sb-int:unencapsulate 'cram-prolog::compile-goal-term 'count))))
 
+(test the-same-query-built-afresh-is-compiled-once
+  "A query built afresh for each call (a backquoted goal) that is EQUAL to one asked shortly
+before reuses its compilation, is not kept in the table, and still sees the facts as they are."
+  (let ((compiles 0)
+        (before (hash-table-count cram-prolog::*compiled-goals*)))
+    (sb-int:encapsulate 'cram-prolog::compile-goal-term 'count
+                        (lambda (f &rest args) (incf compiles) (apply f args)))
+    (unwind-protect
+         (progn
+           (dotimes (i 50)
+             (let ((name (copy-seq "shelf")))
+               (is (equal '((1 2) (3 4))
+                          (mapcar (lambda (b) (list (cdr (assoc '?a b)) (cdr (assoc '?b b))))
+                                  (force-ll (prolog `(member (?a ?b ,name) ((1 2 "shelf") (3 4 "shelf"))))))))))
+           (is (<= compiles 1) "compiled ~d times for 50 equal queries" compiles)
+           (is (<= (hash-table-count cram-prolog::*compiled-goals*) before))
+           ;; an equal goal with other pre-bound variables, and another goal, are compiled
+           (setf compiles 0)
+           (is (equal '(3) (mapcar (lambda (b) (cdr (assoc '?a b)))
+                                   (force-ll (prolog `(member (?a ?b ,"shelf") ((1 2 "shelf") (3 4 "shelf")))
+                                                     '((?b . 4)))))))
+           (is (= 1 compiles))
+           (is (null (force-ll (prolog `(member (?a ?b ,"table") ((1 2 "shelf") (3 4 "shelf")))))))
+           (is (= 2 compiles))
+           ;; facts that change between two equal queries
+           (eval '(def-fact-group afresh-query-test (afresh-query-fact)
+                   (<- (afresh-query-fact 1))))
+           (is (equal '(1) (mapcar (lambda (b) (cdr (assoc '?x b)))
+                                   (force-ll (prolog (list 'afresh-query-fact '?x))))))
+           (eval '(def-fact-group afresh-query-test (afresh-query-fact)
+                   (<- (afresh-query-fact 2))))
+           (is (equal '(2) (mapcar (lambda (b) (cdr (assoc '?x b)))
+                                   (force-ll (prolog (list 'afresh-query-fact '?x)))))))
+      (sb-int:unencapsulate 'cram-prolog::compile-goal-term 'count)
+      (ignore-errors (remove-fact-group 'afresh-query-test)))))
+
 (test goals-compiled-once-when-asked-again
   "A goal object asked repeatedly (a constant query) is compiled once and kept; goals built
 afresh for one query each are not kept; both give their solutions."

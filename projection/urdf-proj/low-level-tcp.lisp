@@ -481,6 +481,7 @@ last step's MANIPULATION-LOW-LEVEL-FAILURE propagates."
     (when lefts (check-arm :left))
     (when rights (check-arm :right))
     (with-motion ("moving-tcp")
+     (with-tcp-in-ee-kept
       (dotimes (i steps t)
         (let ((goals (append (let ((p (nth i lefts))) (and p (list (cons :left p))))
                              (let ((p (nth i rights))) (and p (list (cons :right p)))))))
@@ -490,4 +491,4 @@ last step's MANIPULATION-LOW-LEVEL-FAILURE propagates."
                 (handler-case (reach-tcp-poses goals collision-mode move-base fixed-torso)
                   (common-fail:manipulation-low-level-failure (failure)
                     (cpl:log-message :warn '(urdf-proj move-tcp) "Skipping intermediate pose ~d: ~a"
-                                     i failure))))))))))
+                                     i failure)))))))))))
