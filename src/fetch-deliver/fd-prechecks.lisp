@@ -39,9 +39,9 @@ itself reports them, when it is performed."
      (handler-case
          (urdf-proj::with-tcp-in-ee-kept
           (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
-                                              urdf-proj::*base-offsets*))
-               (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*))
-               (urdf-proj:*sweep-check* (and (eq urdf-proj:*sweep-check* :fail) :fail)))
+                                               urdf-proj::*base-offsets*))
+                (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*))
+                (urdf-proj:*sweep-check* (and (eq urdf-proj:*sweep-check* :fail) :fail)))
             (dolist (pose poses t)
               (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil))))
        (common-fail:manipulation-low-level-failure () nil)))))
