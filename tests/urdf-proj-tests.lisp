@@ -198,6 +198,43 @@
     (is (near 0.3 (joint "head_pan_joint")))
     (is (near 0.2 (joint "head_tilt_joint")))))
 
+(test looking-at-the-same-point-from-the-same-place-again
+  "NECK-ANGLES-TOWARDS answers a look at a point it solved from the same place before without
+solving again, with the same values and the same joint state; another place or another point
+is solved."
+  (with-kitchen
+    (let* ((robot (robot))
+           (joints (urdf-proj:neck-joints))
+           (camera (urdf-proj:camera-frame robot))
+           (target (cl-transforms:make-3d-vector 1.2 -0.7 0.6))
+           (solved 0))
+      (flet ((look (point)
+               (list (urdf-proj::neck-angles-towards robot joints camera point)
+                     (mapcar (lambda (j) (btr:joint-state robot j)) joints))))
+        (sb-int:encapsulate 'urdf-proj::%neck-angles-towards 'count-solves
+                            (lambda (f &rest args) (incf solved) (apply f args)))
+        (unwind-protect
+             (let ((first (look target)))
+               (is (= 1 solved))
+               ;; from another neck state, the same answer and state without solving
+               (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0.4d0)) joints) robot)
+               (is (equal first (look target)))
+               (is (= 1 solved))
+               (is (equal first (look (cl-transforms:make-3d-vector 1.2d0 -0.7d0 0.6d0))))
+               (is (= 1 solved))
+               ;; another point, and the same point from another place
+               (look (cl-transforms:make-3d-vector 1.2 -0.6 0.6))
+               (is (= 2 solved))
+               (setf (btr:pose robot) (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.1 0 0)
+                                                               (cl-transforms:make-identity-rotation)))
+               (let ((moved (look target)))
+                 (is (= 3 solved))
+                 (is (not (equal (first moved) (first first)))))
+               ;; bad input is refused as before
+               (signals error (urdf-proj::neck-angles-towards robot joints camera '(1 2 3)))
+               (signals error (urdf-proj::neck-angles-towards robot joints "no_such_frame" target)))
+          (sb-int:unencapsulate 'urdf-proj::%neck-angles-towards 'count-solves))))))
+
 ;;; ---- perception --------------------------------------------------------------------------------
 
 (test detect-failures-and-all

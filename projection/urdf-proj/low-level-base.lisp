@@ -270,6 +270,36 @@ TORSO-GOAL-NOT-REACHED. Returns the value set."
 (defun normalize-angle (a)
   (atan (sin a) (cos a)))
 
+(defvar *neck-answers* '()
+  "NECK-ANGLES-TOWARDS' last answers, newest first (at most 8): entries (urdf joints camera key
+values . clamped-values), KEY the map pose of the link the neck hangs from and the target, on
+which alone the answer depends (the solver starts from the neck joints at zero): a robot that
+looks at the same point from the same place again gets the same answer without solving.")
+
+(defun neck-base-link (robot joints camera)
+  "The link of ROBOT that the neck JOINTS hang from, when the path from it down to the CAMERA
+link crosses every one of JOINTS and no other movable joint; NIL otherwise."
+  (let ((links (cl-urdf:links (btr:urdf robot)))
+        (left (copy-list joints)))
+    (loop for link = (gethash camera links) then (cl-urdf:parent joint)
+          for joint = (and link (cl-urdf:parent-joint link))
+          do (cond ((null joint) (return nil))
+                   ((member (cl-urdf:name joint) left :test #'string=)
+                    (setf left (remove (cl-urdf:name joint) left :test #'string=))
+                    (when (null left) (return (cl-urdf:name (cl-urdf:parent joint)))))
+                   ((not (eq (cl-urdf:joint-type joint) :fixed)) (return nil))))))
+
+(defun neck-answer-key (robot base target)
+  "The map pose of ROBOT's link BASE and the point TARGET, as 10 doubles."
+  (let ((key (make-array 10 :element-type 'double-float)))
+    (replace key (cram-native:robot-link-pose (btr:world-handle (btr:world robot))
+                                              (btr:object-handle robot)
+                                              (btr:link-index robot base)))
+    (setf (aref key 7) (float (cl-transforms:x target) 1d0)
+          (aref key 8) (float (cl-transforms:y target) 1d0)
+          (aref key 9) (float (cl-transforms:z target) 1d0))
+    key))
+
 (defun neck-angles-towards (robot joints camera target)
   "Joint values of the neck JOINTS that point the optical axis (z) of the CAMERA frame at the
 map point TARGET, computed from the URDF joint axes and the link poses by turning each joint in
@@ -277,8 +307,27 @@ turn (exact for pan-tilt heads, also for cameras off the joint axes). The values
 outside the joints' limits; the joints are left at them clamped to the limits, without the
 clamping's warnings (the solver passes through such values; its caller decides what a value
 beyond a limit means)."
-  (handler-bind ((warning #'muffle-warning))
-    (%neck-angles-towards robot joints camera target)))
+  (let* ((base (and (cl-transforms:3d-vector-p target) (stringp camera)
+                    (alexandria:proper-list-p joints) (every #'stringp joints)
+                    (neck-base-link robot joints camera)))
+         (key (and base (neck-answer-key robot base target)))
+         (urdf (btr:urdf robot)))
+    (loop for (u js c k values . clamped) in *neck-answers*
+          when (and key (eq u urdf) (equal js joints) (string= c camera) (every #'eql k key))
+            do (cram-native:set-robot-joints
+                (btr:world-handle (btr:world robot)) (btr:object-handle robot)
+                (map '(simple-array (signed-byte 32) (*)) (lambda (j) (btr:joint-index robot j)) joints)
+                clamped)
+               (return-from neck-angles-towards (copy-list values)))
+    (let ((values (handler-bind ((warning #'muffle-warning))
+                    (%neck-angles-towards robot joints camera target))))
+      (when key
+        (let ((clamped (map '(simple-array double-float (*)) (lambda (j) (btr:joint-state robot j))
+                            joints)))
+          (setf *neck-answers*
+                (cons (list* urdf (copy-list joints) camera key (copy-list values) clamped)
+                      (subseq *neck-answers* 0 (min (length *neck-answers*) 7))))))
+      values)))
 
 (defun %neck-angles-towards (robot joints camera target)
   (btr:set-robot-state-from-joints (mapcar (lambda (j) (list j 0d0)) joints) robot)
