@@ -181,6 +181,27 @@ functions called at each centre, in the order they are applied, a cell that is 0
       (is (eq t same) "the grid is that of the functions called cell by cell"))
     (is (< 1000 (costmap::positive-cells (costmap::cost-window costmap))) "many cells are not 0")))
 
+(test items-free-space-fills-the-grid-as-called-cell-by-cell
+  ;; the free space around objects on a surface: rectangles grown by a margin, one of them
+  ;; with an edge on cell centres (a strict comparison there)
+  (let ((costmap (costmap:make-location-costmap :width 4 :height 4 :resolution 0.05
+                                                :origin-x -2 :origin-y -2))
+        (items '((0.0d0 0.1d0 0.4d0 0.5d0) (-1.0d0 -1.2d0 -0.7d0 -0.6d0) (-0.025d0 -0.025d0 0.3d0 0.2d0)))
+        (exact (costmap::items-free-space-function '((0 0 1/2 1/2)) 1/20)))
+    (costmap:register-cost-function costmap (costmap:make-range-cost-function '(0 0) 1.6) 'range 0)
+    (costmap:register-cost-function costmap (costmap::items-free-space-function items 0.05d0)
+                                    'free-space 1)
+    (is (costmap::cost-function-grid-evaluator
+         (second (find 'free-space (costmap:cost-functions costmap) :key #'first))))
+    (is (eq t (equalp (cell-by-cell-grid costmap) (costmap::cost-grid costmap))))
+    (is (< 100 (costmap::positive-cells (costmap::cost-window costmap))))
+    (is (= 0d0 (funcall (costmap::items-free-space-function items 0.05d0) 0.2d0 0.3d0)))
+    (is (= 1d0 (funcall (costmap::items-free-space-function items 0.05d0) 1.2d0 0.3d0)))
+    ;; other numbers: the function as it is, called cell by cell
+    (is (functionp exact))
+    (is (not (typep exact 'costmap::cost-function)))
+    (is (= 0d0 (funcall exact 0.1d0 0.1d0)))))
+
 (test normalised-values-and-counts-without-the-normalised-grid
   (let ((costmap (costmap:make-location-costmap :width 4 :height 4 :resolution 0.1
                                                 :origin-x -2 :origin-y -2)))

@@ -193,11 +193,33 @@ robot stands without turning the wrist)."
                                  (cl-transforms:x hi) (cl-transforms:y hi)))))))
 
 (defun items-free-space-function (items margin)
-  "A cost function: 0 within MARGIN metres of the rectangles ITEMS ((x0 y0 x1 y1) ...), else 1."
-  (lambda (x y)
-    (if (loop for (a b c d) in items
-              thereis (and (< (- a margin) x (+ c margin)) (< (- b margin) y (+ d margin))))
-        0d0 1d0)))
+  "A cost function: 0 within MARGIN metres of the rectangles ITEMS ((x0 y0 x1 y1) ...), else 1.
+With double-float numbers, it fills a costmap's grid without a call per cell."
+  (let ((function (lambda (x y)
+                    (if (loop for (a b c d) in items
+                              thereis (and (< (- a margin) x (+ c margin))
+                                           (< (- b margin) y (+ d margin))))
+                        0d0 1d0))))
+    (if (and (typep margin 'double-float)
+             (every (lambda (item) (and (alexandria:proper-list-p item) (= (length item) 4)
+                                        (every (lambda (v) (typep v 'double-float)) item)))
+                    items))
+        ;; the grown rectangles as the function computes them, x0 y0 x1 y1 each
+        (let ((grown (make-array (* 4 (length items)) :element-type 'double-float)))
+          (loop for (a b c d) in items
+                for i from 0 by 4
+                do (setf (aref grown i) (- a margin) (aref grown (+ i 1)) (- b margin)
+                         (aref grown (+ i 2)) (+ c margin) (aref grown (+ i 3)) (+ d margin)))
+          (make-cost-function
+           function
+           :name 'items-free-space
+           :grid-evaluator
+           (cell-evaluator (x y)
+             (if (loop for i of-type fixnum from 0 below (length grown) by 4
+                       thereis (and (< (aref grown i) x (aref grown (+ i 2)))
+                                    (< (aref grown (+ i 1)) y (aref grown (+ i 3)))))
+                 0d0 1d0))))
+        function)))
 
 (defun turned-items-free-space-function (items half-x half-y yaw-function)
   "A cost function: 0 where an object of half extents HALF-X, HALF-Y (in its own frame), turned
