@@ -191,26 +191,14 @@ so that the table holds the goals asked repeatedly only.")
 (sb-ext:defglobal **recent-goal-next** (list 0)
   "The slot of **RECENT-GOALS** the next compiled goal goes to.")
 
-(defun recent-goal-entry (goal)
-  "The entry of GOAL when it is among **RECENT-GOALS**, or NIL."
+(defun recent-goal-entry (goal &optional (test #'eq))
+  "The entry of a goal among **RECENT-GOALS** that is TEST (EQ, or EQUAL for a query built
+afresh) to GOAL, or NIL."
   (let ((recent **recent-goals**))
     (declare (type (simple-vector 16) recent))
     (loop for i of-type fixnum below 16
           for slot = (svref recent i)
-          when (eq (car slot) goal) return (cdr slot))))
-
-(defun recent-equal-goal-entry (goal extra-vars)
-  "The entry of a goal among **RECENT-GOALS** EQUAL to the list GOAL (a query built afresh
-each time, the same as one asked shortly before), compiled for the same EXTRA-VARS, or NIL."
-  (let ((recent **recent-goals**))
-    (declare (type (simple-vector 16) recent))
-    (loop for i of-type fixnum below 16
-          for slot = (svref recent i)
-          when (and (consp (car slot))
-                    (eq (caar slot) (car goal))
-                    (equal (car slot) goal)
-                    (equal (fourth (cdr slot)) extra-vars))
-            return (cdr slot))))
+          when (and (car slot) (funcall test (car slot) goal)) return (cdr slot))))
 
 (defun compiled-goal (goal &optional extra-vars)
   "The goal function, frame and environment of the source GOAL, with variables also for the
@@ -228,7 +216,8 @@ compiled for this query."
                                             (setf (gethash goal *compiled-goals*) recent)
                                             recent))
                                         ;; the same query built afresh: not kept in the table
-                                        (and (consp goal) (recent-equal-goal-entry goal extra-vars)))))
+                                        (let ((same (and (consp goal) (recent-goal-entry goal #'equal))))
+                                          (and (fits same) same)))))
                          (when entry
                            (setf **last-compiled-goal** (cons goal entry)))
                          entry)))))

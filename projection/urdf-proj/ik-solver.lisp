@@ -187,7 +187,7 @@ only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and 
         (multiple-value-bind (solution err)
             (cram-native:chain-ik (ik-chain-native chain) (btr::pose->vector goal-pose "IK goal")
                                   :seed q :max-restarts max-restarts :position-tolerance pt
-                                  :rotation-tolerance rt :random-seed (random #.(expt 2 32) random-state))
+                                  :rotation-tolerance rt :random-seed (native-ik-seed random-state))
           (when solution
             (return-from solve-ik (values (coerce (wrap-continuous chain (copy-seq solution)) 'list)
                                           (aref err 0) (aref err 1))))
@@ -203,6 +203,11 @@ only as *IK-FALLBACK-RESTARTS* says). Second and third values: the position and 
               (when ok (return-from solve-ik (values (coerce (wrap-continuous chain start) 'list) pe re))))))))
     (values nil best-p best-r)))
 
+(defun native-ik-seed (random-state)
+  "The seed of the native IK solver's random restarts, drawn from RANDOM-STATE: the one number
+SOLVE-IK draws for a native chain."
+  (random #.(expt 2 32) random-state))
+
 (defun pass-over-ik (chain &optional (random-state *ik-random-state*))
   "Draw from RANDOM-STATE what SOLVE-IK draws for CHAIN, without solving, when that does not
 depend on the outcome: CHAIN has a native solver (SOLVE-IK draws one number for it, whether it
@@ -210,5 +215,5 @@ solves the goal or not) and no *IK-FALLBACK-RESTARTS* follow a failure. For a ca
 is known to fail anyway, so that every later IK call draws what it would have. True when
 drawn; NIL (nothing drawn) when the draws would depend on the outcome."
   (when (and (ik-chain-native chain) (null *ik-fallback-restarts*))
-    (random #.(expt 2 32) random-state)
+    (native-ik-seed random-state)
     t))

@@ -96,37 +96,40 @@ the same pairs again and again."
              when (and link hit) collect (cons link hit))
        objects))))
 
+(defun first-counted-contact (world robot skip-links)
+  "The first contact (link other-handle other-link distance, as CRAM-NATIVE:OBJECT-FIRST-CONTACT)
+of ROBOT's links but those of the indices SKIP-LINKS with anything but the planes and its
+attached objects, contacts the motion intends allowed. Second to fourth values: the robot's
+attachments, attached objects and intended contacts (COLLISION-EXCEPTS, INTENDED-CONTACTS)."
+  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
+    (let ((intended (intended-contacts robot)))
+      (values (cram-native:object-first-contact
+               (btr::world-handle world) (btr:object-handle robot)
+               :except (mapcar #'btr:object-handle (append planes attached-objects))
+               :skip-links skip-links
+               :allowed (allowed-contact-triples world robot intended))
+              attached attached-objects intended))))
+
 (defun robot-collides-p (&key (world btr:*current-bullet-world*) (robot (robot-object world))
                               ignore-links)
   "True when ROBOT-COLLISIONS would name anything, found at less cost: the native check stops
 at the first contact that counts."
-  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
-    (let* ((intended (intended-contacts robot))
-           (contact (cram-native:object-first-contact
-                     (btr::world-handle world) (btr:object-handle robot)
-                     :except (mapcar #'btr:object-handle (append planes attached-objects))
-                     :skip-links (remove nil (mapcar (lambda (l) (robot-link-index robot l))
-                                                     ignore-links))
-                     :allowed (allowed-contact-triples world robot intended))))
-      (cond ((null contact)
-             (not (null (attached-object-hits world robot attached attached-objects intended))))
-            ;; a body the belief state does not know: as ROBOT-COLLISIONS counts it
-            ((btr::object-by-handle world (third contact)) t)
-            (t (not (null (robot-collisions :world world :robot robot :ignore-links ignore-links))))))))
+  (multiple-value-bind (contact attached attached-objects intended)
+      (first-counted-contact world robot
+                             (remove nil (mapcar (lambda (l) (robot-link-index robot l)) ignore-links)))
+    (cond ((null contact)
+           (not (null (attached-object-hits world robot attached attached-objects intended))))
+          ;; a body the belief state does not know: as ROBOT-COLLISIONS counts it
+          ((btr::object-by-handle world (third contact)) t)
+          (t (not (null (robot-collisions :world world :robot robot :ignore-links ignore-links)))))))
 
 (defun other-links-collide-p (robot skip-links &key (world btr:*current-bullet-world*))
   "True when a link of ROBOT other than those of the link indices SKIP-LINKS touches a body the
 belief state knows, in a contact that ROBOT-COLLIDES-P counts (the planes and the robot's
 attached objects aside, intended contacts allowed): ROBOT-COLLIDES-P is then true however the
 joints that move only SKIP-LINKS are set."
-  (multiple-value-bind (attached attached-objects planes) (collision-excepts world robot)
-    (declare (ignore attached))
-    (let ((contact (cram-native:object-first-contact
-                    (btr::world-handle world) (btr:object-handle robot)
-                    :except (mapcar #'btr:object-handle (append planes attached-objects))
-                    :skip-links skip-links
-                    :allowed (allowed-contact-triples world robot (intended-contacts robot)))))
-      (and contact (btr::object-by-handle world (third contact)) t))))
+  (let ((contact (first-counted-contact world robot skip-links)))
+    (and contact (btr::object-by-handle world (third contact)) t)))
 
 ;;; ---- navigation ---------------------------------------------------------------------------------
 
@@ -276,6 +279,10 @@ values . clamped-values), KEY the map pose of the link the neck hangs from and t
 which alone the answer depends (the solver starts from the neck joints at zero): a robot that
 looks at the same point from the same place again gets the same answer without solving.")
 
+(defun joint-indices (robot joints)
+  "The indices of the joints named JOINTS of ROBOT, as a vector for CRAM-NATIVE."
+  (map '(simple-array (signed-byte 32) (*)) (lambda (j) (btr:joint-index robot j)) joints))
+
 (defun neck-base-link (robot joints camera)
   "The link of ROBOT that the neck JOINTS hang from, when the path from it down to the CAMERA
 link crosses every one of JOINTS and no other movable joint; NIL otherwise."
@@ -316,7 +323,7 @@ beyond a limit means)."
           when (and key (eq u urdf) (equal js joints) (string= c camera) (every #'eql k key))
             do (cram-native:set-robot-joints
                 (btr:world-handle (btr:world robot)) (btr:object-handle robot)
-                (map '(simple-array (signed-byte 32) (*)) (lambda (j) (btr:joint-index robot j)) joints)
+                (joint-indices robot joints)
                 clamped)
                (return-from neck-angles-towards (copy-list values)))
     (let ((values (handler-bind ((warning #'muffle-warning))
@@ -347,8 +354,7 @@ beyond a limit means)."
                                   (apply #'cl-transforms:make-3d-vector (cl-urdf:axis urdf-joint))
                                   0d0)))
                         joints))
-         (joint-indices (map '(simple-array (signed-byte 32) (*))
-                             (lambda (j) (btr:joint-index robot j)) joints))
+         (joint-indices (joint-indices robot joints))
          (index-list (coerce joint-indices 'list))
          ;; the joints' values in the shim as the steps leave them: at first what the zeros
          ;; were set to

@@ -75,11 +75,6 @@ NIL for any other query (see ROB-INT::CACHED-FACT-SOLUTIONS)."
   (check-arm arm)
   (fact-value '?frame `(rob-int:robot-tool-frame ,(robot-name) ,arm ?frame)))
 
-(defvar *tcp-in-ee-transforms* '()
-  "TCP-IN-EE-TRANSFORM's answers that depend on the facts and the URDF alone, entries
-\(database-generation urdf robot-name arm transform . inverse): each valid while the Prolog
-database is the same.")
-
 (defvar *tcp-in-ee-memo* nil
   "NIL, or a cons whose car is an alist of (arm robot transform . inverse) that
 TCP-IN-EE-TRANSFORM fills and reads: bound by WITH-TCP-IN-EE-KEPT.")
@@ -101,41 +96,26 @@ Second value: its inverse."
                             return (cddr entry))))
           (if kept
               (values (car kept) (cdr kept))
-              (multiple-value-bind (transform inverse steady) (%tcp-in-ee-transform arm robot)
+              (multiple-value-bind (transform inverse steady) (%tcp-in-ee-transform arm robot t)
                 ;; not one that follows a joint (a tool link below a gripper joint)
                 (when steady (push (list* arm robot transform inverse) (car memo)))
                 (values transform inverse))))
         (%tcp-in-ee-transform arm robot))))
 
-(defun %tcp-in-ee-transform (arm robot)
-  "TCP-IN-EE-TRANSFORM, without the memo; third value: true unless it follows a joint."
-  (let ((generation (prolog:database-generation))
-        (name (robot-name))
-        (urdf (btr:urdf robot)))
-    (loop for (g u n a transform . inverse) in *tcp-in-ee-transforms*
-          when (and (eql g generation) (eq u urdf) (eq a arm) (equal n name))
-            do (return-from %tcp-in-ee-transform (values transform inverse t)))
-    (let* ((pose (fact-value '?pose `(rob-int:tcp-in-ee-pose ,name ?pose)))
-           (tool (tool-frame arm))
-           (ee (end-effector-link arm))
-           (transform
-             (cond (pose (cl-transforms:pose->transform (btr::ensure-pose pose "TCP-IN-EE pose")))
-                   ((and tool (btr:link-exists-p robot tool))
-                    (relative-transform (btr:link-pose robot ee) (btr:link-pose robot tool)))
-                   (t (cl-transforms:make-identity-transform))))
-           (inverse (cl-transforms:transform-inv transform))
-           (link (and (not pose) tool (btr:link-exists-p robot tool)))
-           ;; a tool link below a gripper joint moves with it
-           (steady (or (not link) (fixed-below-p robot ee tool))))
-      ;; kept while the database is the same: an answer from plain facts and the URDF alone
-      (when (and steady
-                 (plain-facts-p 'rob-int:tcp-in-ee-pose)
-                 (or pose (and (plain-facts-p 'rob-int:robot-tool-frame)
-                               (plain-facts-p 'rob-int:end-effector-link))))
-        (setf *tcp-in-ee-transforms*
-              (cons (list* generation urdf name arm transform inverse)
-                    (remove generation *tcp-in-ee-transforms* :key #'car :test-not #'eql))))
-      (values transform inverse steady))))
+(defun %tcp-in-ee-transform (arm robot &optional steadiness)
+  "TCP-IN-EE-TRANSFORM, without the memo; with STEADINESS, a third value: true unless it
+follows a joint."
+  (let* ((pose (fact-value '?pose `(rob-int:tcp-in-ee-pose ,(robot-name) ?pose)))
+         (tool (tool-frame arm))
+         (ee (end-effector-link arm))
+         (link (and (not pose) tool (btr:link-exists-p robot tool)))
+         (transform
+           (cond (pose (cl-transforms:pose->transform (btr::ensure-pose pose "TCP-IN-EE pose")))
+                 (link (relative-transform (btr:link-pose robot ee) (btr:link-pose robot tool)))
+                 (t (cl-transforms:make-identity-transform)))))
+    ;; a tool link below a gripper joint moves with it
+    (values transform (cl-transforms:transform-inv transform)
+            (and steadiness (or (not link) (fixed-below-p robot ee tool))))))
 
 (defun fixed-below-p (robot ancestor link)
   "True when the URDF link LINK of ROBOT hangs below its link ANCESTOR through fixed joints
