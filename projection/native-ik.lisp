@@ -9,6 +9,8 @@
 (defcn "cn_chain_limits" :int (c :int) (lo :pointer) (hi :pointer))
 (defcn "cn_chain_fk" :int (c :int) (q :pointer) (out :pointer))
 (defcn "cn_chain_may_reach" :int (c :int) (position :pointer) (pos-tol :double))
+(defcn "cn_chain_reach_map_get" :int (c :int) (params :pointer) (cells :pointer) (cap :int))
+(defcn "cn_chain_reach_map_set" :int (c :int) (params :pointer) (cells :pointer) (n :int))
 (defcn "cn_chain_ik" :int (c :int) (target :pointer) (seed :pointer) (restarts :int)
   (pos-tol :double) (rot-tol :double) (rng :unsigned-int) (out :pointer) (err :pointer))
 
@@ -57,6 +59,33 @@ tolerance above 2 mm: always)."
     (with-vector-pointers ((pp p))
       (= 1 (ccall "cn_chain_may_reach" chain pp
                   (real-arg position-tolerance 'chain-may-reach-p "position tolerance"))))))
+
+(defconstant +reach-map-params+ 20 "The numbers of a reach map besides its cells (CN_REACH_PARAMS).")
+
+(defun chain-reach-map (chain)
+  "CHAIN's reach map as Lisp data, built first when needed: a cons of a DVEC of parameters
+\(among them a hash of the chain's joints, limits and tip) and an octet vector of cells. A
+chain made again in another process takes it back with SET-CHAIN-REACH-MAP instead of
+building it."
+  (let ((params (make-dvec +reach-map-params+)))
+    (with-vector-pointers ((pp params))
+      (let* ((n (ccall "cn_chain_reach_map_get" chain pp (cffi:null-pointer) 0))
+             (cells (make-array n :element-type '(unsigned-byte 8))))
+        (with-vector-pointers ((cp cells))
+          (ccall "cn_chain_reach_map_get" chain pp cp n))
+        (cons params cells)))))
+
+(defun set-chain-reach-map (chain map)
+  "Give CHAIN the reach map MAP (from CHAIN-REACH-MAP) instead of building it. True when
+installed; NIL when MAP is not a map of a chain with CHAIN's joints, limits and tip (then
+nothing changes)."
+  (destructuring-bind (params . cells) map
+    (unless (and (typep params '(simple-array double-float (*)))
+                 (= (length params) +reach-map-params+)
+                 (typep cells '(simple-array (unsigned-byte 8) (*))))
+      (error "SET-CHAIN-REACH-MAP: ~s is not a reach map of CHAIN-REACH-MAP." map))
+    (with-vector-pointers ((pp params) (cp cells))
+      (= 1 (ccall "cn_chain_reach_map_set" chain pp cp (length cells))))))
 
 (defun chain-ik (chain target-pose &key seed (max-restarts 200) (position-tolerance 1d-3)
                                         (rotation-tolerance 1d-2) (random-seed 1))

@@ -55,3 +55,27 @@
     (signals-naming ("position tolerance") (chain-may-reach-p c '(0 0 0) :position-tolerance -1))
     ;; a tolerance the map does not answer for: always "may"
     (is-true (chain-may-reach-p c '(5 0 0) :position-tolerance 0.5))))
+
+(test reach-map-kept-and-given-back
+  ;; a chain made again (as in the process a saved core starts) takes the kept map instead of
+  ;; building it: the same answers everywhere; a map of another chain is refused and changes
+  ;; nothing; what is no map is an error
+  (with-pr2-chain (c "r_wrist_roll_link")
+    (let ((map (chain-reach-map c)))
+      (is (= 20 (length (car map))))
+      (is (< 10000 (length (cdr map))) "only ~d cells" (length (cdr map)))
+      (with-pr2-chain (again "r_wrist_roll_link")
+        (is-true (set-chain-reach-map again map))
+        (is (equalp map (chain-reach-map again)))
+        (let ((state (sb-ext:seed-random-state 9)) (differ '()))
+          (dotimes (k 5000)
+            (let ((p (loop repeat 3 collect (- (random 2.4d0 state) 1.2d0))))
+              (unless (eq (chain-may-reach-p c p) (chain-may-reach-p again p))
+                (push p differ))))
+          (is (null differ) "answers differ at ~s" (first differ))))
+      (with-pr2-chain (left "l_wrist_roll_link")
+        (let ((own (chain-reach-map left)))
+          (is-false (set-chain-reach-map left map))
+          (is (equalp own (chain-reach-map left)))))
+      (signals error (set-chain-reach-map c (cons (car map) "cells")))
+      (signals error (set-chain-reach-map c (cons (subseq (car map) 0 5) (cdr map)))))))

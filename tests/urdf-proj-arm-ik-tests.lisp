@@ -65,3 +65,26 @@
       (is (null (urdf-proj::chain-ik-from-map chain ee child far (robot) nil 3)))
       (signals error (urdf-proj::first-joint-child
                       (urdf-proj::%make-ik-chain :joint-names #("no_such_joint")) (robot))))))
+
+(test reach-maps-kept-for-chains-made-again
+  ;; KEEP-REACH-MAPS keeps the maps of the cached chains; the chains made after the cache is
+  ;; cleared (as in the process a saved core starts) take them instead of building them
+  (with-kitchen
+    (let ((urdf-proj::*kept-reach-maps* '()))
+      (urdf-proj:arm-ik-chain :left (robot))
+      (urdf-proj:arm-ik-chain :right (robot))
+      (is (<= 2 (urdf-proj::keep-reach-maps)))
+      (let ((kept (length urdf-proj::*kept-reach-maps*)))
+        (is (= kept (urdf-proj::keep-reach-maps)) "kept again: ~d maps" kept))
+      (let ((installed 0))
+        (sb-int:encapsulate 'urdf-proj::install-kept-reach-map 'count
+                            (lambda (f native) (let ((r (funcall f native))) (when r (incf installed)) r)))
+        (unwind-protect
+             (progn
+               (urdf-proj::clear-ik-chain-cache)
+               (let ((left (urdf-proj:arm-ik-chain :left (robot))))
+                 (is (= 1 installed))
+                 (is (equalp (cram-native:chain-reach-map (urdf-proj::ik-chain-native left))
+                             (find (car (cram-native:chain-reach-map (urdf-proj::ik-chain-native left)))
+                                   urdf-proj::*kept-reach-maps* :key #'car :test #'equalp)))))
+          (sb-int:unencapsulate 'urdf-proj::install-kept-reach-map 'count))))))

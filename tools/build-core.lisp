@@ -34,14 +34,24 @@ state, and the variables that loading computed from the environment."
   "The variables BTW-TUT:INIT-PROJECTION sets: WARM-UP puts their values back. (BTW-TUT's
 read-once URDFs must come from the ROS parameters when a node runs in the new process.)")
 
+(defparameter *warm-up-runs* 1
+  "How many move-bottle campaign runs WARM-UP makes after the belief state. A plan's first run
+in a process compiles what PCL makes on first use (the optimized constructors of MAKE-INSTANCE,
+the dispatch functions of the generic functions on its way: some 0.1 s); made before the core
+is saved, a campaign worker starts with them.")
+
 (defun warm-up ()
   "Make one belief state the way campaign runs do, so that the saved core holds what this costs
 a new process the first time in Lisp: the compiled dispatch functions and constructors of the
-generic functions on the way, and (*PREPARSED-URDFS*) the parsed URDFs of the model files. The
-variables INIT-PROJECTION sets and the random states are put back; SAVE-CORE destroys the world."
+generic functions on the way, and (*PREPARSED-URDFS*) the parsed URDFs of the model files;
+then *WARM-UP-RUNS* move-bottle campaign runs, for what a plan compiles on first use. The
+variables INIT-PROJECTION sets and the random states are put back; SAVE-CORE destroys the
+worlds. (A campaign run does not depend on the runs its process made before it: see
+RESET-PROJECTION.)"
   (let ((saved (mapcar (lambda (s) (if (boundp s) (list (symbol-value s)) '())) *warm-up-specials*))
         (random-states (list (make-random-state *random-state*)
-                             (make-random-state urdf-proj:*ik-random-state*)))
+                             (make-random-state urdf-proj:*ik-random-state*)
+                             (make-random-state costmap:*costmap-random-state*)))
         (parsed '()))
     (sb-int:encapsulate 'cl-urdf:parse-urdf 'record
                         (lambda (parse &rest args)
@@ -52,12 +62,17 @@ variables INIT-PROJECTION sets and the random states are put back; SAVE-CORE des
     (unwind-protect
          (progn
            (dolist (s '(btw-tut::*robot-urdf* btw-tut::*kitchen-urdf*)) (setf (symbol-value s) nil))
-           (btw-tut:init-projection))
+           (btw-tut:init-projection)
+           (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
+           (let ((*preparsed-urdfs* (reverse parsed)))
+             (dotimes (i *warm-up-runs*)
+               (move-bottle-run-record 1 i))))
       (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
       (loop for s in *warm-up-specials* for v in saved
             do (if v (setf (symbol-value s) (first v)) (makunbound s)))
       (setf *random-state* (first random-states)
-            urdf-proj:*ik-random-state* (second random-states)))
+            urdf-proj:*ik-random-state* (second random-states)
+            costmap:*costmap-random-state* (third random-states)))
     (setf *preparsed-urdfs* (reverse parsed))))
 
 (defun neutralize-worlds ()
@@ -95,10 +110,11 @@ worlds besides the load-time belief state)."
   (setf btr:*current-bullet-world* nil)
   ;; foreign copies of URDF texts (the preparsed ones' among them) live in this process's heap
   (clrhash cram-native::*urdf-foreign-strings*)
-  ;; native IK chains, cached by URDF model (none after WARM-UP, but a preparsed model would
-  ;; find a stale one)
-  (let ((clear (find-symbol "CLEAR-IK-CHAIN-CACHE" :cram-urdf-projection)))
-    (when (and clear (fboundp clear)) (funcall clear)))
+  ;; native IK chains, cached by URDF model (a preparsed model would find a stale one);
+  ;; their reach maps, built at the first IK call of WARM-UP's run, are kept for the chains of
+  ;; the new process
+  (urdf-proj::keep-reach-maps)
+  (urdf-proj::clear-ik-chain-cache)
   (sb-ext:gc :full t)
   (neutralize-worlds)
   (let ((live (cram-native:world-count)))

@@ -55,22 +55,25 @@ struct Chain {
   std::unique_ptr<ReachMap> reach;  // where the tip can be: built at the first IK call
 };
 
+// What the chain's reach map is made of.
+std::vector<ReachJoint> reach_joints(const Chain &c) {
+  std::vector<ReachJoint> joints(c.kin.size());
+  for (size_t i = 0; i < c.kin.size(); ++i) {
+    const KinJoint &k = c.kin[i];
+    joints[i].R = k.R;
+    joints[i].p = k.p;
+    joints[i].axis = k.axis;
+    joints[i].prismatic = k.prismatic;
+    // an unlimited prismatic joint has no range to sample: no map
+    joints[i].lower = k.range == Range::Free ? -HUGE_VAL : c.lower[i];
+    joints[i].upper = k.range == Range::Free ? HUGE_VAL : c.upper[i];
+  }
+  return joints;
+}
+
 // The chain's reach map, built at the first call (entry points run one at a time).
 const ReachMap &reach_map(Chain &c) {
-  if (!c.reach) {
-    std::vector<ReachJoint> joints(c.kin.size());
-    for (size_t i = 0; i < c.kin.size(); ++i) {
-      const KinJoint &k = c.kin[i];
-      joints[i].R = k.R;
-      joints[i].p = k.p;
-      joints[i].axis = k.axis;
-      joints[i].prismatic = k.prismatic;
-      // an unlimited prismatic joint has no range to sample: no map
-      joints[i].lower = k.range == Range::Free ? -HUGE_VAL : c.lower[i];
-      joints[i].upper = k.range == Range::Free ? HUGE_VAL : c.upper[i];
-    }
-    c.reach = std::make_unique<ReachMap>(joints, c.tip_p);
-  }
+  if (!c.reach) c.reach = std::make_unique<ReachMap>(reach_joints(c), c.tip_p);
   return *c.reach;
 }
 
@@ -454,6 +457,33 @@ int cn_chain_may_reach(int h, const double *position3, double pos_tol) {
       if (!std::isfinite(position3[i])) fail(CN_E_ARG, "position has %s", num(position3[i]).c_str());
     check_positive(pos_tol, "position tolerance");
     return reach_map(c).may_reach(Vec3(position3[0], position3[1], position3[2]), pos_tol) ? 1 : 0;
+  });
+}
+
+int cn_chain_reach_map_get(int h, double *out_params, unsigned char *out_cells, int cap) {
+  return guard([&] {
+    Chain &c = chain(h);
+    check_ptr(out_params, "parameter output");
+    if (cap < 0) fail(CN_E_ARG, "capacity %d", cap);
+    if (cap > 0) check_ptr(out_cells, "cell output");
+    const ReachMap &m = reach_map(c);
+    m.save(reach_joints(c), c.tip_p, out_params);
+    const std::vector<unsigned char> &cells = m.cells();
+    std::memcpy(out_cells, cells.data(), std::min(cells.size(), (size_t)cap));
+    return (int)cells.size();
+  });
+}
+
+int cn_chain_reach_map_set(int h, const double *params, const unsigned char *cells, int n) {
+  return guard([&] {
+    Chain &c = chain(h);
+    check_ptr(params, "parameters");
+    if (n < 0) fail(CN_E_ARG, "cell count %d", n);
+    if (n > 0) check_ptr(cells, "cells");
+    std::unique_ptr<ReachMap> m = ReachMap::restore(reach_joints(c), c.tip_p, params, cells, n);
+    if (!m) return 0;
+    c.reach = std::move(m);
+    return 1;
   });
 }
 

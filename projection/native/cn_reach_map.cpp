@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace cn {
 namespace {
@@ -223,6 +224,67 @@ bool ReachMap::may_reach(const Vec3 &goal, double tolerance) const {
   double fi = std::floor(rho / kCell), fk = std::floor((h - h0_) / kCell);
   if (!(fi >= 0 && fi < n_rho_ && fk >= 0 && fk < n_h_)) return false;
   return cells_[(size_t)fi * n_h_ + (size_t)fk] != 0;
+}
+
+namespace {
+// FNV-1a over the bytes of a double
+void hash_double(uint64_t &h, double x) {
+  unsigned char b[sizeof x];
+  std::memcpy(b, &x, sizeof x);
+  for (unsigned char c : b) h = (h ^ c) * 0x100000001b3ULL;
+}
+}  // namespace
+
+uint64_t ReachMap::Key(const std::vector<ReachJoint> &joints, const Vec3 &tip_p) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  // the map's own constants: a map built with others is another map
+  for (double x : {kCell, kFirstStep, kLargestStep, (double)kSampleBudget, kMaxTolerance, 1.0})
+    hash_double(h, x);
+  hash_double(h, (double)joints.size());
+  for (const ReachJoint &j : joints) {
+    for (int i = 0; i < 9; ++i) hash_double(h, j.R(i));
+    for (int i = 0; i < 3; ++i) hash_double(h, j.p(i));
+    for (int i = 0; i < 3; ++i) hash_double(h, j.axis(i));
+    hash_double(h, j.prismatic ? 1.0 : 0.0);
+    hash_double(h, j.lower);
+    hash_double(h, j.upper);
+  }
+  for (int i = 0; i < 3; ++i) hash_double(h, tip_p(i));
+  return h;
+}
+
+void ReachMap::save(const std::vector<ReachJoint> &joints, const Vec3 &tip_p,
+                    double *params) const {
+  const uint64_t key = Key(joints, tip_p);
+  params[0] = (double)(key >> 32);
+  params[1] = (double)(key & 0xffffffffULL);
+  for (int i = 0; i < 9; ++i) params[2 + i] = first_R_(i);
+  for (int i = 0; i < 3; ++i) params[11 + i] = first_p_(i);
+  for (int i = 0; i < 3; ++i) params[14 + i] = first_axis_(i);
+  params[17] = h0_;
+  params[18] = n_rho_;
+  params[19] = n_h_;
+}
+
+std::unique_ptr<ReachMap> ReachMap::restore(const std::vector<ReachJoint> &joints,
+                                            const Vec3 &tip_p, const double *params,
+                                            const unsigned char *cells, size_t n) {
+  const uint64_t key = Key(joints, tip_p);
+  if (params[0] != (double)(key >> 32) || params[1] != (double)(key & 0xffffffffULL))
+    return nullptr;
+  const double rho = params[18], hs = params[19];
+  if (!(rho >= 0 && hs >= 0 && rho == std::floor(rho) && hs == std::floor(hs) &&
+        rho * hs == (double)n && rho < 1e6 && hs < 1e6))
+    return nullptr;
+  std::unique_ptr<ReachMap> m(new ReachMap());
+  for (int i = 0; i < 9; ++i) m->first_R_(i) = params[2 + i];
+  for (int i = 0; i < 3; ++i) m->first_p_(i) = params[11 + i];
+  for (int i = 0; i < 3; ++i) m->first_axis_(i) = params[14 + i];
+  m->h0_ = params[17];
+  m->n_rho_ = (int)rho;
+  m->n_h_ = (int)hs;
+  m->cells_.assign(cells, cells + n);
+  return m;
 }
 
 }  // namespace cn

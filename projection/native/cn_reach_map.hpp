@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <memory>
 
 #include <vector>
 
@@ -52,8 +53,22 @@ class ReachMap {
   // the tip within `tolerance` of `goal` (in the chain's base frame).
   bool may_reach(const Eigen::Vector3d &goal, double tolerance) const;
 
+  // The map as numbers, to keep beyond the process (see cn_chain_reach_map_get): kParams
+  // doubles, the first two the halves of Key(joints, tip_p), and the cells.
+  static constexpr int kParams = 20;
+  static uint64_t Key(const std::vector<ReachJoint> &joints, const Eigen::Vector3d &tip_p);
+  void save(const std::vector<ReachJoint> &joints, const Eigen::Vector3d &tip_p,
+            double *params) const;
+  const std::vector<unsigned char> &cells() const { return cells_; }
+  // The map of `params` and `cells` (from save) when they are a map of JOINTS and TIP_P, else
+  // nullptr.
+  static std::unique_ptr<ReachMap> restore(const std::vector<ReachJoint> &joints,
+                                           const Eigen::Vector3d &tip_p, const double *params,
+                                           const unsigned char *cells, size_t n);
+
 
  private:
+  ReachMap() = default;
   bool build(const std::vector<ReachJoint> &joints, const Eigen::Vector3d &tip_p, double step);
   void mark(const Eigen::Vector3d &tip_in_first);
   Eigen::Matrix3d first_R_;  // base frame -> first joint frame

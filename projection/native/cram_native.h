@@ -285,6 +285,15 @@ int cn_chain_fk(int chain, const double *q, double *out7);     /* tip in base_li
  * values within the limits bring it there (the chain's reach map, built at its first use;
  * pos_tol above 2 mm: always 1).  cn_chain_ik gives such a goal up before any step. */
 int cn_chain_may_reach(int chain, const double *position3, double pos_tol);
+/* The chain's reach map as numbers, to keep beyond this process (a saved Lisp core): out_params
+ * gets CN_REACH_PARAMS doubles (the first two the halves of a hash of the chain's joints, limits
+ * and tip), out_cells the first `cap` of its cells.  -> the number of cells (the map built
+ * first when needed; 0: the chain has no map). */
+#define CN_REACH_PARAMS 20
+int cn_chain_reach_map_get(int chain, double *out_params, unsigned char *out_cells, int cap);
+/* Give the chain the reach map of cn_chain_reach_map_get instead of building it.  -> 1 when
+ * installed, 0 when it is not a map of this chain (its hash differs: nothing changes). */
+int cn_chain_reach_map_set(int chain, const double *params, const unsigned char *cells, int n);
 /* IK for the tip pose (in base_link frame) from seed q; random restarts within the limits
  * drawn from `rng_seed`.  -> 0 solved (within pos_tol m and rot_tol rad), 1 not solved
  * (out_q = best found).  out_err2 (may be NULL): position and rotation error. */
