@@ -108,7 +108,7 @@ makes a worker kill itself with SIGKILL before a run; exit code, output and erro
            (is (search "before run 3" err) "the report names the run it died on")
            (is (search "| test hook: worker generation 0 kills itself" err)
                "the report shows the tail of the worker's own output")
-           (is (search "restarting worker 1" err))
+           (is (search "restarting worker " err))
            (is (search "RSS" err) "--memory-every reports the workers' memory")
            (is (eql 0 (run-cli "--batch" "6" "--seed" "7" "--jobs" "1" "--results" calm)))
            (let ((rk (records killed)))
@@ -263,3 +263,58 @@ code, standard output (trimmed) and error output."
            (is (search "2 runs" out) "no summary: ~a" out)
            (is (search "sweeps (a moving link or carried object and what its path hits)" out)))
       (ignore-errors (delete-file results)))))
+
+;;; ---- the pool the workers of a campaign take their runs from (tools/campaign-pool.lisp) -----------
+
+(defparameter *pool-form*
+  "(let* ((dir (uiop:ensure-directory-pathname
+               (format nil \"~apool-test-~d\" (namestring (uiop:temporary-directory)) (sb-posix:getpid))))
+         (out '()))
+    (unwind-protect
+         (progn
+           ;; two workers taking turns: each claims the next run no one has
+           (let* ((pool (cram-plans-demo::write-pool dir '(10 11 12 13 14)))
+                  (a (cram-plans-demo::run-source '(99) pool 0 0))
+                  (b (cram-plans-demo::run-source '() pool 1 0)))
+             (push (list (funcall a) (funcall a) (funcall b) (funcall a) (funcall b) (funcall b)
+                         (funcall a) (funcall b))
+                   out)
+             (push (list (cram-plans-demo::pool-claims pool 0 0) (cram-plans-demo::pool-claims pool 1 0)
+                         (cram-plans-demo::pool-claims pool 1 1))
+                   out))
+           (uiop:delete-directory-tree dir :validate t)
+           ;; two threads claiming at once from a pool of 600
+           (let* ((pool (cram-plans-demo::write-pool dir (loop for i below 600 collect i)))
+                  (got (make-array 2 :initial-element nil))
+                  (threads (loop for w below 2
+                                 collect (let ((w w))
+                                           (sb-thread:make-thread
+                                            (lambda ()
+                                              (loop with next = (cram-plans-demo::run-source '() pool w 0)
+                                                    for i = (funcall next) while i
+                                                    do (push i (aref got w)))))))))
+             (mapc (function sb-thread:join-thread) threads)
+             (push (list (reverse (aref got 0)) (reverse (aref got 1))
+                         (cram-plans-demo::pool-claims pool 0 0) (cram-plans-demo::pool-claims pool 1 0))
+                   out)))
+      (uiop:delete-directory-tree dir :validate t :if-does-not-exist :ignore))
+    (prin1 (reverse out)) (terpri))"
+  "A program for a process of the saved core: claims from campaign pools, printed as a list.")
+
+(test pool-gives-each-run-to-one-worker
+  (multiple-value-bind (code core) (core-script)
+    (is (eql 0 code))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (list "sbcl" "--core" core "--noinform" "--non-interactive" "--no-userinit"
+                                "--no-sysinit" "--eval" *pool-form*)
+                          :output :string :error-output :string :ignore-error-status t)
+      (is (eql 0 code) "~a" err)
+      (destructuring-bind (&optional turns claims threads) (ignore-errors (read-from-string out))
+        ;; the given run first, then the pool's runs in order, each to the first who asks
+        (is (equal '(99 10 11 12 13 14 nil nil) turns) "~s" turns)
+        (is (equal '((10 12) (11 13 14) ()) claims) "~s" claims)
+        (destructuring-bind (&optional a b claims-a claims-b) threads
+          (is (equal (loop for i below 600 collect i) (sort (copy-list (append a b)) #'<))
+              "every run of the pool exactly once: ~d and ~d runs" (length a) (length b))
+          (is (equal a claims-a))
+          (is (equal b claims-b)))))))

@@ -169,4 +169,5 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
 ;; one compilation unit: runner.lisp calls functions it defines further down
 (with-compilation-unit ()
   (load (merge-pathnames "runner.lisp" *tools-directory*))
+  (load (merge-pathnames "campaign-pool.lisp" *tools-directory*))
   (load (merge-pathnames "household-run.lisp" *tools-directory*)))

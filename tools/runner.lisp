@@ -238,8 +238,9 @@ worker that reaches it. A line on standard output announces it."
 54 MB (two or three collections per run, each copying what survives).")
 
 (defun worker (campaign-seed indices-file results-file
-               &key (slot 0) (generation 0) memory-every memory-file (demo *campaign-demo*))
-  "The body of one worker process: run the campaign runs listed in INDICES-FILE in order,
+               &key (slot 0) (generation 0) memory-every memory-file (demo *campaign-demo*) pool)
+  "The body of one worker process: run the campaign runs listed in INDICES-FILE in order, then
+\(with POOL, a pool file of WRITE-POOL) the runs it claims from the pool one at a time,
 appending one JSON line per run to RESULTS-FILE (a run that signals outside the plan is
 recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0.
 Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECORD-RUNS*)."
@@ -247,7 +248,9 @@ Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECOR
         *campaign-demo* demo
         (sb-ext:bytes-consed-between-gcs) *worker-nursery-bytes*)
   (with-open-file (out results-file :direction :output :if-exists :append :if-does-not-exist :create)
-    (loop for i in (read-indices indices-file)
+    (loop with next = (run-source (read-indices indices-file) pool slot generation)
+          for i = (funcall next)
+          while i
           for done from 1
           do (test-kill-hook i generation)
              (let ((record (handler-case (run-record campaign-seed i)
@@ -267,8 +270,14 @@ Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECOR
 
 (defstruct (worker-slot (:conc-name slot-))
   "One worker position of a campaign and the process that currently fills it."
-  id (generation 0) process indices results log memory
+  id (generation 0) process indices results log memory pool
   (results-offset 0) (memory-offset 0) (stalls 0) finished)
+
+(defun slot-runs (slot)
+  "The runs of SLOT's current process: those it was given, then those it claimed from the
+campaign's pool (POOL-CLAIMS)."
+  (append (slot-indices slot)
+          (and (slot-pool slot) (pool-claims (slot-pool slot) (slot-id slot) (slot-generation slot)))))
 
 (defun shard-indices (n shard)
   "The run indices 0…N-1 of SHARD (I . COUNT): every COUNT-th index starting at I-1."
@@ -347,10 +356,10 @@ from one and the file is still there, else loading DEMO (tools/demo.lisp) as bef
             (sb-ext:run-program
              "sbcl" (append (worker-image-options demo)
                             (list "--eval" (format nil "(cram-plans-demo::worker ~d ~s ~s :slot ~d :generation ~d ~
-                                                        :memory-every ~s :memory-file ~s :demo ~s)"
+                                                        :memory-every ~s :memory-file ~s :demo ~s :pool ~s)"
                                                    seed (file "indices") (file "jsonl") (slot-id slot)
                                                    (slot-generation slot) memory-every (file "memory")
-                                                   *campaign-demo*)))
+                                                   *campaign-demo* (slot-pool slot))))
              :search t :wait nil :input nil :output (file "log") :if-output-exists :supersede
              :error :output :environment (worker-environment))))))
 
@@ -394,17 +403,21 @@ index wins) and its new memory samples into the list in the cons SAMPLES, printi
 new one on the runs it lost. A run that two workers in a row died on is recorded as a failure.
 Returns a plist describing the death, or NIL."
   (let* ((process (slot-process slot))
-         (remaining (remove-if (lambda (i) (gethash i lines)) (slot-indices slot)))
-         (ran (- (length (slot-indices slot)) (length remaining))))
+         (clean (and (eql 0 (sb-ext:process-exit-code process))
+                     (eq :exited (sb-ext:process-status process))))
+         ;; a worker that ended by itself reported every run it claimed before it claimed the
+         ;; next: its claims are looked up only after a death
+         (runs (if clean (slot-indices slot) (slot-runs slot)))
+         (remaining (remove-if (lambda (i) (gethash i lines)) runs))
+         (ran (- (length runs) (length remaining))))
     (sb-ext:process-close process)
-    (if (and (null remaining) (eql 0 (sb-ext:process-exit-code process))
-             (eq :exited (sb-ext:process-status process)))
+    (if (and (null remaining) clean)
         (progn (setf (slot-finished slot) t) nil)
         (let ((how (exit-description process))
               (tail (output-tail (slot-log slot))))
           (format stream "~&batch: worker ~d (pid ~d) ~a after ~d of its ~d runs~:[~;, before run ~:*~d~]~%~
                           ~:[  (it printed nothing)~%~;~:*~{  | ~a~%~}~]"
-                  (slot-id slot) (sb-ext:process-pid process) how ran (length (slot-indices slot))
+                  (slot-id slot) (sb-ext:process-pid process) how ran (length runs)
                   (first remaining) tail)
           (if (zerop ran) (incf (slot-stalls slot)) (setf (slot-stalls slot) 0))
           (when (>= (slot-stalls slot) *max-stalls*)
@@ -458,10 +471,11 @@ generation, runs, rss_mb, heap_mb) and the deaths (plists)."
         (error "batch: cannot make the folder of the results file ~s: ~a" results e)))
     (unwind-protect
          (progn
-           (loop for slot in slots for j from 0
-                 do (launch-worker slot (loop for k in indices for pos from 0
-                                              when (= (mod pos jobs) j) collect k)
-                                   seed tmp memory-every))
+           ;; the workers claim the runs one at a time from a pool (campaign-pool.lisp)
+           (let ((pool (write-pool tmp indices)))
+             (dolist (slot slots)
+               (setf (slot-pool slot) pool)
+               (launch-worker slot '() seed tmp memory-every)))
            (loop with shown = -1
                  for active = (remove-if #'slot-finished slots)
                  while active
