@@ -3,6 +3,8 @@
 (in-package :cram-native)
 
 (defcn "cn_robot_add_urdf" :int (w :int) (xml :string) (pose :pointer) (flags :int))
+(defcn "cn_robot_add_urdf_moved" :int (w :int) (xml :pointer) (pose :pointer) (flags :int)
+  (n :int) (names :pointer) (xyz :pointer) (rpy :pointer))
 (defcn "cn_robot_name" :int (w :int) (r :int) (out :pointer))
 (defcn "cn_robot_num_links" :int (w :int) (r :int))
 (defcn "cn_robot_num_joints" :int (w :int) (r :int))
@@ -46,19 +48,39 @@ changed)."
           (setf (gethash string *urdf-foreign-strings*) (cons (length string) pointer))
           pointer))))
 
-(defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes single-hull)
+(defun add-urdf (world urdf-string &key (pose '(0 0 0 0 0 0 1)) exact-meshes single-hull
+                                        moved-joints)
   "Add the articulated object described by URDF-STRING at base POSE: one kinematic body per
 link with collision geometry, every joint at 0.  Collision meshes become one convex hull per
 sub-mesh; EXACT-MESHES: exact triangle meshes instead (for static environments); SINGLE-HULL:
-one convex hull over all vertices of each mesh.  The two exclude each other.  Returns its
-handle."
+one convex hull over all vertices of each mesh.  The two exclude each other.  MOVED-JOINTS, a
+list of (joint-name xyz rpy) with the texts of <origin> attributes: the object of the text with
+those joints' origins changed, made from the model of URDF-STRING without parsing again.
+Returns its handle."
   (when (and exact-meshes single-hull)
     (arg-error 'add-urdf ":exact-meshes ~s and :single-hull ~s exclude each other"
                exact-meshes single-hull))
-  (with-pose-pointer (p pose 'add-urdf)
-    (ccall "cn_robot_add_urdf" world
-           (urdf-foreign-string (string-arg urdf-string 'add-urdf "URDF")) p
-           (cond (exact-meshes 1) (single-hull 2) (t 0)))))
+  (let ((xml (urdf-foreign-string (string-arg urdf-string 'add-urdf "URDF")))
+        (flags (cond (exact-meshes 1) (single-hull 2) (t 0))))
+    (with-pose-pointer (p pose 'add-urdf)
+      (if (null moved-joints)
+          (ccall "cn_robot_add_urdf" world xml p flags)
+          (let* ((n (length moved-joints))
+                 (strings '()))
+            (unless (every (lambda (m) (and (listp m) (= 3 (length m)) (every #'stringp m)))
+                           moved-joints)
+              (arg-error 'add-urdf ":moved-joints ~s, expected a list of (joint-name xyz rpy) strings"
+                         moved-joints))
+            (cffi:with-foreign-objects ((names :pointer n) (xyz :pointer n) (rpy :pointer n))
+              (unwind-protect
+                   (progn
+                     (loop for (name x r) in moved-joints for i from 0
+                           do (loop for (array text) in (list (list names name) (list xyz x) (list rpy r))
+                                    do (let ((f (cffi:foreign-string-alloc text :encoding :utf-8)))
+                                         (push f strings)
+                                         (setf (cffi:mem-aref array :pointer i) f))))
+                     (ccall "cn_robot_add_urdf_moved" world xml p flags n names xyz rpy))
+                (mapc #'cffi:foreign-string-free strings))))))))
 
 (defun %name-out (fn world robot index)
   (cffi:with-foreign-object (out :pointer)

@@ -184,6 +184,28 @@ digits) left out."
           "the table moved ~,3f m" (cl-transforms:v-dist before after))))
   (btw-tut:init-projection))
 
+(test a-varied-kitchen-is-made-from-the-kitchen-model
+  ;; the physics shim makes the varied kitchen from the model of the kitchen's text with the
+  ;; footprints' origins changed, without parsing the varied text: the link poses of a kitchen
+  ;; made from that text, bit for bit
+  (btw-tut:init-projection)
+  (unwind-protect
+       (let ((demos::*varied-kitchen-random-state* (sb-ext:seed-random-state 11)))
+         (demos::vary-kitchen)
+         (let* ((kitchen (btr:get-environment-object))
+                (model (btr:urdf kitchen))
+                (moved (cl-urdf:moved-joints model)))
+           (is (= (length demos::*varied-footprints*) (length (cdr moved))))
+           (is (search "<joint name=\"dining_area_footprint_joint\"" (car moved)))
+           (let ((w (cram-native:make-world)))
+             (unwind-protect
+                  (let ((r (cram-native:add-urdf w (cl-urdf:source model) :exact-meshes t)))
+                    (is (equalp (cram-native:robot-link-poses w r)
+                                (cram-native:robot-link-poses (btr:world-handle btr:*current-bullet-world*)
+                                                              (btr:object-handle kitchen)))))
+               (cram-native:destroy-world w)))))
+    (btw-tut:init-projection)))
+
 (test a-varied-kitchen-is-the-parse-of-its-text
   ;; the varied kitchen is copied from the parse of the kitchen's text with the footprints
   ;; moved: the same model as a parse of the varied text

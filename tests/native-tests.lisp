@@ -292,3 +292,34 @@ world as it was."
       (signals-naming ("joint index 17") (robot-link-poses-if w r '(17) '(0.1) links))
       (signals-naming ("link index 99") (robot-link-poses-if w r (list j1) '(0.1) '(99)))
       (signals-naming ("j1" "NaN") (robot-link-poses-if w r (list j1) (list (nan)) links)))))
+
+(test urdf-with-moved-joint-origins
+  ;; the object of a URDF with some joints' <origin> attributes changed, made from the model of
+  ;; the original text: the link poses of the edited text, bit for bit, in any joint state
+  (with-world (w)
+    (let* ((moved '(("j2" "0.01 -0.02 0.47" "0.1 -0.2 0.3") ("j3" "0.35 0.0 0.01" "0 0 1.5707963")))
+           (edited (let ((text *arm-urdf*))
+                     (loop for (from to) in '(("<origin xyz=\"0 0 0.5\"/>"
+                                               "<origin xyz=\"0.01 -0.02 0.47\" rpy=\"0.1 -0.2 0.3\"/>")
+                                              ("<origin xyz=\"0.4 0 0\"/>"
+                                               "<origin xyz=\"0.35 0.0 0.01\" rpy=\"0 0 1.5707963\"/>"))
+                           do (let ((at (search from text)))
+                                (setf text (concatenate 'string (subseq text 0 at) to
+                                                        (subseq text (+ at (length from)))))))
+                     text))
+           (a (add-urdf w edited :pose '(1 2 0 0 0 0 1)))
+           (b (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0 1) :moved-joints moved))
+           (plain (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0 1))))
+      (is (equalp (robot-link-poses w a) (robot-link-poses w b)))
+      (is (not (equalp (robot-link-poses w a) (robot-link-poses w plain))))
+      (dolist (r (list a b))
+        (set-robot-joints w r (list (robot-joint-index w r "j1") (robot-joint-index w r "j2"))
+                          '(0.7d0 -0.4d0)))
+      (is (equalp (robot-link-poses w a) (robot-link-poses w b)))
+      (is (equal (robot-joint-names w a) (robot-joint-names w b)))
+      ;; the original model is not changed
+      (is (equalp (robot-link-poses w plain)
+                  (robot-link-poses w (add-urdf w *arm-urdf* :pose '(1 2 0 0 0 0 1)))))
+      (signals-naming ("no joint 'nope'" "arm") (add-urdf w *arm-urdf* :moved-joints '(("nope" "0 0 0" "0 0 0"))))
+      (signals-naming ("j2" "origin" "1 2") (add-urdf w *arm-urdf* :moved-joints '(("j2" "1 2" "0 0 0"))))
+      (signals-naming (":moved-joints") (add-urdf w *arm-urdf* :moved-joints '(("j2" 1 2)))))))

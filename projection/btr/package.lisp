@@ -7,7 +7,7 @@
            #:link #:joint #:parent #:child #:joint-type #:origin #:axis #:limits
            #:lower #:upper #:mimic #:collision #:visual
            #:child-joints #:parent-joint #:robot-link-names #:robot-joint-names
-           #:rerooted-source #:text-origin #:robot-with-joint-origins
+           #:rerooted-source #:text-origin #:robot-with-joint-origins #:moved-joints
            #:child-joints-in-order #:movable-joint-p #:first-descendant-link #:first-descendant-joint
            #:handle-link #:connecting-joint #:generate-urdf-string))
 

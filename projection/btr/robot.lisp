@@ -196,10 +196,12 @@ table name → value. All joints are set at once, then links and attached object
     ;; a model whose ROOT-LINK was set to another link is re-rooted there
     (unless (eq natural-root (cl-urdf:root-link model))
       (setf model (cl-urdf:parse-urdf (cl-urdf:rerooted-source model))))
-    (let ((handle (native:add-urdf (world-handle world) (cl-urdf:source model) :pose pose
-                                  :exact-meshes (eq collision-group :static-filter)
-                                  :single-hull (and (not compound)
-                                                    (not (eq collision-group :static-filter))))))
+    (let* ((moved (cl-urdf:moved-joints model))
+           (handle (native:add-urdf (world-handle world) (if moved (car moved) (cl-urdf:source model))
+                                    :pose pose :moved-joints (cdr moved)
+                                    :exact-meshes (eq collision-group :static-filter)
+                                    :single-hull (and (not compound)
+                                                      (not (eq collision-group :static-filter))))))
       (values handle 'robot-object nil
               (list :model (build-kinematic-model world handle model))))))
 

@@ -16,7 +16,12 @@
    (links :initarg :links :reader links :documentation "Hash table: link name → LINK.")
    (joints :initarg :joints :reader joints :documentation "Hash table: joint name → JOINT.")
    (root-link :initarg :root-link :accessor root-link :documentation "The LINK without parent.")
-   (source :initarg :source :reader source :documentation "The URDF XML text."))
+   (source :initarg :source :reader source :documentation "The URDF XML text.")
+   (moved-joints :initarg :moved-joints :initform nil :reader moved-joints
+                 :documentation "NIL, or (text . moves): this model is the one of the URDF text
+TEXT with the <origin> attributes of some joints changed, MOVES a list of (joint-name xyz rpy)
+of their texts (ROBOT-WITH-JOINT-ORIGINS :MOVED), from which the physics shim makes it without
+parsing SOURCE."))
   (:documentation "A parsed URDF model."))
 
 (defclass link ()
@@ -346,11 +351,14 @@ a new link J_reversed, plus a fixed joint J_reversed_offset with the inverse ori
                            (dom:append-child root offset))))))))))
       (dom:map-document (cxml:make-string-sink) doc))))
 
-(defun robot-with-joint-origins (robot origins &key (source (source robot)))
+(defun robot-with-joint-origins (robot origins &key (source (source robot)) moved)
   "A copy of the parsed ROBOT with fresh links and joints (their geometry, axes and limits
 shared) whose joints named in ORIGINS, an alist of joint name -> origin ((x y z) (qx qy qz qw),
 as TEXT-ORIGIN gives it), have those origins, and whose source text is SOURCE: what PARSE-URDF
-gives for ROBOT's text with those <origin> elements changed, without parsing the text again."
+gives for ROBOT's text with those <origin> elements changed, without parsing the text again.
+MOVED, a list of (joint-name xyz rpy) with the attribute texts those origins were read from
+\(TEXT-ORIGIN's arguments), lets the physics shim make the copy from ROBOT's model as well
+\(MOVED-JOINTS); NIL: from SOURCE."
   (dolist (entry origins)
     (unless (and (consp entry) (gethash (car entry) (joints robot)))
       (urdf-fail "ROBOT-WITH-JOINT-ORIGINS: ~s, expected (joint-name . origin) for a joint of ~s"
@@ -377,4 +385,10 @@ gives for ROBOT's text with those <origin> elements changed, without parsing the
                      (mapcar (lambda (j) (gethash (name j) joints)) (child-joints l))))
              (links robot))
     (make-instance 'robot :name (name robot) :links links :joints joints
-                          :root-link (gethash (name (root-link robot)) links) :source source)))
+                          :root-link (gethash (name (root-link robot)) links) :source source
+                          :moved-joints (and moved
+                                             (let ((base (moved-joints robot)))
+                                               ;; moved again: from the first text, the later
+                                               ;; moves of a joint last
+                                               (cons (if base (car base) (source robot))
+                                                     (append (cdr base) moved)))))))

@@ -392,6 +392,56 @@ static ModelP cached_model(const std::string &xml, MeshMode meshes) {
   return m;
 }
 
+// MODEL with the origins of the joints NAMES given as the texts of <origin> attributes (XYZ,
+// RPY), read as the URDF parser reads them; everything else (links, shapes, the sweep checks'
+// view of the links) is shared.
+static ModelP moved_model(const ModelP &model, int n, const char *const *names,
+                          const char *const *xyz, const char *const *rpy) {
+  auto m = std::make_shared<Model>();
+  m->name = model->name;
+  m->links = model->links;
+  m->joints = model->joints;
+  m->order = model->order;
+  m->root = model->root;
+  m->link_index = model->link_index;
+  m->joint_index = model->joint_index;
+  {
+    std::lock_guard<std::mutex> lock(model->cache_mu);
+    m->sweep_links = model->sweep_links;  // made of link shapes and chains: the same
+  }
+  for (int i = 0; i < n; ++i) {
+    std::string name = check_str(names[i], "joint name");
+    auto it = m->joint_index.find(name);
+    if (it == m->joint_index.end())
+      fail(CN_E_ARG, "model '%s' has no joint '%s' to move", m->name.c_str(), name.c_str());
+    urdf::Pose p;
+    try {
+      p.position.init(check_str(xyz[i], "origin xyz"));
+      p.rotation.init(check_str(rpy[i], "origin rpy"));
+    } catch (const std::exception &e) {
+      fail(CN_E_ARG, "joint '%s': origin xyz \"%s\" rpy \"%s\": %s", name.c_str(), xyz[i], rpy[i],
+           e.what());
+    }
+    check_pose_finite(p, "joint '" + name + "'");
+    m->joints[it->second].origin = to_bt(p);
+  }
+  return m;
+}
+
+static MeshMode mesh_mode(int flags) {
+  if (flags & ~(CN_URDF_EXACT_MESHES | CN_URDF_SINGLE_HULL))
+    fail(CN_E_ARG, "unknown URDF flags %d (known: CN_URDF_EXACT_MESHES = %d, CN_URDF_SINGLE_HULL = %d)",
+         flags, CN_URDF_EXACT_MESHES, CN_URDF_SINGLE_HULL);
+  if ((flags & CN_URDF_EXACT_MESHES) && (flags & CN_URDF_SINGLE_HULL))
+    fail(CN_E_ARG, "URDF flags %d: CN_URDF_EXACT_MESHES and CN_URDF_SINGLE_HULL exclude each other",
+         flags);
+  return (flags & CN_URDF_EXACT_MESHES)  ? MeshMode::Exact
+         : (flags & CN_URDF_SINGLE_HULL) ? MeshMode::OneHull
+                                         : MeshMode::Hulls;
+}
+
+static int add_model(World &w, const ModelP &m, const btTransform &base);
+
 extern "C" {
 
 int cn_robot_add_urdf(int wh, const char *xml, const double *pose, int flags) {
@@ -399,30 +449,47 @@ int cn_robot_add_urdf(int wh, const char *xml, const double *pose, int flags) {
     World &w = world(wh);
     std::string x = check_str(xml, "URDF string");
     btTransform base = read_pose(pose, "base pose");
-    if (flags & ~(CN_URDF_EXACT_MESHES | CN_URDF_SINGLE_HULL))
-      fail(CN_E_ARG, "unknown URDF flags %d (known: CN_URDF_EXACT_MESHES = %d, CN_URDF_SINGLE_HULL = %d)",
-           flags, CN_URDF_EXACT_MESHES, CN_URDF_SINGLE_HULL);
-    if ((flags & CN_URDF_EXACT_MESHES) && (flags & CN_URDF_SINGLE_HULL))
-      fail(CN_E_ARG, "URDF flags %d: CN_URDF_EXACT_MESHES and CN_URDF_SINGLE_HULL exclude each other",
-           flags);
-    ModelP m = cached_model(x, (flags & CN_URDF_EXACT_MESHES)  ? MeshMode::Exact
-                               : (flags & CN_URDF_SINGLE_HULL) ? MeshMode::OneHull
-                                                               : MeshMode::Hulls);
-    std::unique_ptr<Object> o(new Object);
-    o->kind = CN_ARTICULATED;
-    o->model = m;
-    o->base = base;
-    o->group = 32;
-    o->mask = -1;
-    o->q.assign(m->joints.size(), 0.0);
-    o->link_rgba.assign(m->links.size(), {0.5f, 0.5f, 0.5f, -1.0f});
-    o->id = (int)w.objects.size();
-    compute_link_poses(*o, o->link_pose);
-    robot_new_bodies(w, *o);
-    w.objects.push_back(o.release());
-    return (int)w.objects.size() - 1;
+    return add_model(w, cached_model(x, mesh_mode(flags)), base);
   });
 }
+
+int cn_robot_add_urdf_moved(int wh, const char *xml, const double *pose, int flags, int n,
+                            const char *const *joint_names, const char *const *xyz,
+                            const char *const *rpy) {
+  return guard([&] {
+    World &w = world(wh);
+    std::string x = check_str(xml, "URDF string");
+    btTransform base = read_pose(pose, "base pose");
+    if (n < 0) fail(CN_E_ARG, "joint count %d, expected >= 0", n);
+    if (n > 0) {
+      check_ptr(joint_names, "joint name array");
+      check_ptr(xyz, "origin xyz array");
+      check_ptr(rpy, "origin rpy array");
+    }
+    return add_model(w, moved_model(cached_model(x, mesh_mode(flags)), n, joint_names, xyz, rpy),
+                     base);
+  });
+}
+
+}  // extern "C"
+
+static int add_model(World &w, const ModelP &m, const btTransform &base) {
+  std::unique_ptr<Object> o(new Object);
+  o->kind = CN_ARTICULATED;
+  o->model = m;
+  o->base = base;
+  o->group = 32;
+  o->mask = -1;
+  o->q.assign(m->joints.size(), 0.0);
+  o->link_rgba.assign(m->links.size(), {0.5f, 0.5f, 0.5f, -1.0f});
+  o->id = (int)w.objects.size();
+  compute_link_poses(*o, o->link_pose);
+  robot_new_bodies(w, *o);
+  w.objects.push_back(o.release());
+  return (int)w.objects.size() - 1;
+}
+
+extern "C" {
 
 int cn_robot_name(int wh, int r, const char **out) {
   return guard([&] {

@@ -149,6 +149,13 @@ int cn_body_shape(int world, int body, double *out_dims4);          /* -> kind  
 #define CN_URDF_EXACT_MESHES 1
 #define CN_URDF_SINGLE_HULL  2
 int cn_robot_add_urdf(int world, const char *urdf_xml, const double *base_pose7, int flags);
+/* The same with the origins of the n joints joint_names[i] set to the <origin> attribute texts
+ * xyz[i] and rpy[i], read as the URDF parser reads them: what cn_robot_add_urdf gives for the
+ * text with those <origin> elements changed, without parsing it (the model of urdf_xml is
+ * parsed once and shared). */
+int cn_robot_add_urdf_moved(int world, const char *urdf_xml, const double *base_pose7, int flags,
+                            int n, const char *const *joint_names, const char *const *xyz,
+                            const char *const *rpy);
 int cn_robot_name(int world, int robot, const char **out_name);
 int cn_robot_num_links(int world, int robot);
 int cn_robot_num_joints(int world, int robot);     /* all joints, fixed ones included     */

@@ -29,10 +29,11 @@ xyz and rpy texts as second and third values."
 (defun vary-urdf-text (text &optional (state *varied-kitchen-random-state*))
   "TEXT (a kitchen URDF) with the footprint joints of *VARIED-FOOTPRINTS* moved by offsets drawn
 uniformly from STATE within their bounds. Second value: the new origins, an alist of joint
-name -> origin as CL-URDF:PARSE-URDF reads them from the new text."
+name -> origin as CL-URDF:PARSE-URDF reads them from the new text; third value: their texts, a
+list of (joint-name xyz rpy)."
   (flet ((uniform (bound) (if (zerop bound) 0d0 (- (random (* 2d0 bound) state) bound))))
-    (let ((origins '()))
-      (dolist (entry *varied-footprints* (values text (nreverse origins)))
+    (let ((origins '()) (texts '()))
+      (dolist (entry *varied-footprints* (values text (nreverse origins) (nreverse texts)))
         (destructuring-bind (joint mx my myaw) entry
           (let* ((start (or (search (format nil "<joint name=\"~a\"" joint) text)
                             (demo-error "The kitchen URDF has no joint ~s to vary." joint)))
@@ -46,6 +47,7 @@ name -> origin as CL-URDF:PARSE-URDF reads them from the new text."
             (multiple-value-bind (moved new-xyz new-rpy)
                 (moved-origin xyz rpy (uniform mx) (uniform my) (uniform myaw))
               (push (cons joint (cl-urdf:text-origin new-xyz new-rpy joint)) origins)
+              (push (list joint new-xyz new-rpy) texts)
               (setf text (concatenate 'string (subseq text 0 origin) moved (subseq text end))))))))))
 
 (defvar *kitchen-urdf* nil
@@ -71,12 +73,12 @@ call it before spawning."
          (original (roslisp-utilities:robot-description-string
                     :parameter btw-tut:*kitchen-parameter*
                     :fallback-file "resources/iai_kitchen.urdf")))
-    (multiple-value-bind (text origins) (vary-urdf-text original)
+    (multiple-value-bind (text origins moved) (vary-urdf-text original)
       (btr:detach-all-objects old)
       (btr:remove-object world name)
       (btr:add-object world :urdf name '((0 0 0) (0 0 0 1))
                       :urdf (cl-urdf:robot-with-joint-origins (kitchen-urdf original) origins
-                                                              :source text)
+                                                              :source text :moved moved)
                       :collision-group :static-filter
                       :collision-mask '(:default-filter :character-filter)))
     (btr:get-environment-object)))
