@@ -318,3 +318,23 @@ code, standard output (trimmed) and error output."
               "every run of the pool exactly once: ~d and ~d runs" (length a) (length b))
           (is (equal a claims-a))
           (is (equal b claims-b)))))))
+
+(test saved-core-holds-a-warm-up-run-but-no-trace-of-it
+  ;; the core is saved after a move-bottle run of its own (what a plan compiles on first use,
+  ;; the IK chains' reach maps), which leaves no recorded run, run number or world behind
+  (multiple-value-bind (code core) (core-script)
+    (is (eql 0 code))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (list "sbcl" "--core" core "--noinform" "--non-interactive" "--no-userinit"
+                                "--no-sysinit" "--eval"
+                                "(progn (prin1 (list cram-viewer::*run-counter*
+                                                     (length (cram-viewer:recorded-runs))
+                                                     cram-viewer:*record-runs*
+                                                     (length urdf-proj::*kept-reach-maps*)
+                                                     (cram-native:world-count)))
+                                        (terpri))")
+                          :output :string :error-output :string :ignore-error-status t)
+      (is (eql 0 code) "~a" err)
+      (let ((state (ignore-errors (read-from-string out))))
+        (is (equal '(0 0 t 2 1) state) "run counter, recorded runs, recorder, kept reach maps, worlds: ~s"
+            state)))))

@@ -64,9 +64,22 @@ RESET-PROJECTION.)"
            (dolist (s '(btw-tut::*robot-urdf* btw-tut::*kitchen-urdf*)) (setf (symbol-value s) nil))
            (btw-tut:init-projection)
            (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
-           (let ((*preparsed-urdfs* (reverse parsed)))
-             (dotimes (i *warm-up-runs*)
-               (move-bottle-run-record 1 i))))
+           ;; not a run anyone replays: the recorder (whose setting the plan's threads read
+           ;; globally) is off, and the new process numbers its runs from 1
+           (let ((*preparsed-urdfs* (reverse parsed))
+                 (record cram-viewer:*record-runs*)
+                 (counter cram-viewer::*run-counter*))
+             (setf cram-viewer:*record-runs* nil)
+             (unwind-protect
+                  (progn
+                    (dotimes (i *warm-up-runs*)
+                      (move-bottle-run-record 1 i))
+                    ;; every arm's IK chain, for its reach map (SAVE-CORE keeps them)
+                    (dolist (arm (urdf-proj::robot-arms))
+                      (urdf-proj:arm-ik-chain arm (btr:get-robot-object))))
+               (setf cram-viewer:*record-runs* record)
+               (cram-viewer:clear-runs)
+               (setf cram-viewer::*run-counter* counter))))
       (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
       (loop for s in *warm-up-specials* for v in saved
             do (if v (setf (symbol-value s) (first v)) (makunbound s)))
