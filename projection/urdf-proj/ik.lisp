@@ -140,28 +140,6 @@ fixed joints are folded into the transforms. Errors name unknown links or a brok
                                 (when native (install-kept-reach-map native))
                                 native)))))
 
-(defvar *kept-reach-maps* '()
-  "Reach maps of native IK chains (CRAM-NATIVE:CHAIN-REACH-MAP) kept by KEEP-REACH-MAPS, so that
-a chain made again (in the process a saved core starts) takes its map instead of building it
-at its first IK call.")
-
-(defun install-kept-reach-map (native)
-  "Give the native chain NATIVE the first of *KEPT-REACH-MAPS* that is a map of it (the shim
-checks its joints, limits and tip); true when one was."
-  (some (lambda (map) (cram-native:set-chain-reach-map native map)) *kept-reach-maps*))
-
-(defun keep-reach-maps ()
-  "Keep the reach maps of the cached IK chains (*CHAIN-CACHE*) in *KEPT-REACH-MAPS*, for the
-chains made after the native ones are gone (a saved core): returns how many are kept."
-  (sb-thread:with-recursive-lock (*chain-cache-lock*)
-    (loop for c being the hash-values of *chain-cache*
-          for native = (ik-chain-native c)
-          when native
-            do (let ((map (cram-native:chain-reach-map native)))
-                 (unless (find (car map) *kept-reach-maps* :key #'car :test #'equalp)
-                   (push map *kept-reach-maps*)))))
-  (length *kept-reach-maps*))
-
 (defvar *chain-cache* (make-hash-table :test 'equal)
   "(URDF model, base link, tip link) → IK-CHAIN.")
 
@@ -185,6 +163,28 @@ while the Prolog database is the same (the arm facts it read are plain facts).")
           when (ik-chain-native c) do (ignore-errors (cram-native:destroy-chain (ik-chain-native c))))
     (clrhash *chain-cache*)
     (setf *arm-ik-chains* '())))
+
+(defvar *kept-reach-maps* '()
+  "Reach maps of native IK chains (CRAM-NATIVE:CHAIN-REACH-MAP) kept by KEEP-REACH-MAPS, so that
+a chain made again (in the process a saved core starts) takes its map instead of building it
+at its first IK call.")
+
+(defun install-kept-reach-map (native)
+  "Give the native chain NATIVE the first of *KEPT-REACH-MAPS* that is a map of it (the shim
+checks its joints, limits and tip); true when one was."
+  (some (lambda (map) (cram-native:set-chain-reach-map native map)) *kept-reach-maps*))
+
+(defun keep-reach-maps ()
+  "Keep the reach maps of the cached IK chains (*CHAIN-CACHE*) in *KEPT-REACH-MAPS*, for the
+chains made after the native ones are gone (a saved core): returns how many are kept."
+  (sb-thread:with-recursive-lock (*chain-cache-lock*)
+    (loop for c being the hash-values of *chain-cache*
+          for native = (ik-chain-native c)
+          when native
+            do (let ((map (cram-native:chain-reach-map native)))
+                 (unless (find (car map) *kept-reach-maps* :key #'car :test #'equalp)
+                   (push map *kept-reach-maps*)))))
+  (length *kept-reach-maps*))
 
 ;;; ---- forward kinematics -----------------------------------------------------------------------
 
