@@ -65,10 +65,9 @@ RESET-PROJECTION.)"
            (btw-tut:init-projection)
            (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
            ;; not a run anyone replays: the recorder (whose setting the plan's threads read
-           ;; globally) is off, and the new process numbers its runs from 1
+           ;; globally) is off, so it records no run and the new process numbers its runs from 1
            (let ((*preparsed-urdfs* (reverse parsed))
-                 (record cram-viewer:*record-runs*)
-                 (counter cram-viewer::*run-counter*))
+                 (record cram-viewer:*record-runs*))
              (setf cram-viewer:*record-runs* nil)
              (unwind-protect
                   (progn
@@ -77,9 +76,7 @@ RESET-PROJECTION.)"
                     ;; every arm's IK chain, for its reach map (SAVE-CORE keeps them)
                     (dolist (arm (urdf-proj::robot-arms))
                       (urdf-proj:arm-ik-chain arm (btr:get-robot-object))))
-               (setf cram-viewer:*record-runs* record)
-               (cram-viewer:clear-runs)
-               (setf cram-viewer::*run-counter* counter))))
+               (setf cram-viewer:*record-runs* record))))
       (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
       (loop for s in *warm-up-specials* for v in saved
             do (if v (setf (symbol-value s) (first v)) (makunbound s)))

@@ -12,8 +12,7 @@
 an empty claims directory; returns the pool file's path (a string)."
   (let ((pool (namestring (merge-pathnames "pool.indices" directory))))
     (ensure-directories-exist (claims-directory pool))
-    (with-open-file (s pool :direction :output :if-exists :supersede)
-      (with-standard-io-syntax (prin1 (coerce indices 'simple-vector) s)))
+    (write-indices pool (coerce indices 'simple-vector))
     pool))
 
 (defun claims-directory (pool)
@@ -24,6 +23,10 @@ an empty claims directory; returns the pool file's path (a string)."
   "The text a claim file of the worker of SLOT and GENERATION holds."
   (format nil "~d ~d" slot generation))
 
+(defun claim-file (pool position)
+  "The path of the claim file of the run at POSITION of the pool file POOL."
+  (namestring (merge-pathnames (princ-to-string position) (claims-directory pool))))
+
 (defun tag-file (pool tag)
   "The path of the tag file holding TAG, beside the claims of the pool file POOL."
   (namestring (merge-pathnames (format nil "tag-~a" (substitute #\- #\Space tag))
@@ -33,11 +36,9 @@ an empty claims directory; returns the pool file's path (a string)."
   "A function returning, each time it is called, the index of the next run of the pool file
 POOL that this worker (SLOT, GENERATION) claimed, or NIL when every run of the pool is
 claimed. Runs are claimed in the pool's order."
-  (let* ((indices (with-open-file (s pool)
-                    (with-standard-io-syntax (let ((*read-eval* nil)) (read s)))))
+  (let* ((indices (read-indices pool))
          (tag (claim-tag slot generation))
          (tag-file (tag-file pool tag))
-         (directory (namestring (claims-directory pool)))
          (position 0))
     (with-open-file (s tag-file :direction :output :if-exists :supersede)
       (write-string tag s))
@@ -46,7 +47,7 @@ claimed. Runs are claimed in the pool's order."
             do (let ((p position))
                  (incf position)
                  (when (handler-case
-                           (progn (sb-posix:link tag-file (format nil "~a~d" directory p)) t)
+                           (progn (sb-posix:link tag-file (claim-file pool p)) t)
                          (sb-posix:syscall-error (e)
                            (if (= (sb-posix:syscall-errno e) sb-posix:eexist)
                                nil
@@ -56,11 +57,10 @@ claimed. Runs are claimed in the pool's order."
 (defun pool-claims (pool slot generation)
   "The indices of the runs of the pool file POOL that the worker of SLOT and GENERATION
 claimed, in the pool's order."
-  (let ((indices (with-open-file (s pool)
-                   (with-standard-io-syntax (let ((*read-eval* nil)) (read s)))))
+  (let ((indices (read-indices pool))
         (tag (claim-tag slot generation)))
     (loop for p below (length indices)
-          for file = (merge-pathnames (princ-to-string p) (claims-directory pool))
+          for file = (claim-file pool p)
           when (let ((text (with-open-file (s file :if-does-not-exist nil)
                              (and s (read-line s nil)))))
                  (equal text tag))

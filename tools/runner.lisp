@@ -227,7 +227,13 @@ worker that reaches it. A line on standard output announces it."
       (finish-output)
       (sb-posix:kill (sb-posix:getpid) sb-posix:sigkill))))
 
+(defun write-indices (path indices)
+  "Write the run INDICES (a sequence) to the file PATH, for READ-INDICES."
+  (with-open-file (s path :direction :output :if-exists :supersede)
+    (with-standard-io-syntax (prin1 indices s))))
+
 (defun read-indices (path)
+  "The run indices WRITE-INDICES wrote to the file PATH."
   (with-open-file (s path)
     (with-standard-io-syntax
       (let ((*read-eval* nil)) (read s)))))
@@ -347,8 +353,7 @@ from one and the file is still there, else loading DEMO (tools/demo.lisp) as bef
   (let ((base (format nil "worker-~d-~d" (slot-id slot) (slot-generation slot)))
         (demo (namestring (merge-pathnames "demo.lisp" *tools-directory*))))
     (flet ((file (type) (namestring (merge-pathnames (format nil "~a.~a" base type) tmp))))
-      (with-open-file (s (file "indices") :direction :output :if-exists :supersede)
-        (with-standard-io-syntax (prin1 indices s)))
+      (write-indices (file "indices") indices)
       (setf (slot-indices slot) indices
             (slot-results slot) (file "jsonl") (slot-log slot) (file "log") (slot-memory slot) (file "memory")
             (slot-results-offset slot) 0 (slot-memory-offset slot) 0

@@ -440,7 +440,22 @@ static MeshMode mesh_mode(int flags) {
                                          : MeshMode::Hulls;
 }
 
-static int add_model(World &w, const ModelP &m, const btTransform &base);
+// A new articulated object of the model M at BASE in W; returns its handle.
+static int add_model(World &w, const ModelP &m, const btTransform &base) {
+  std::unique_ptr<Object> o(new Object);
+  o->kind = CN_ARTICULATED;
+  o->model = m;
+  o->base = base;
+  o->group = 32;
+  o->mask = -1;
+  o->q.assign(m->joints.size(), 0.0);
+  o->link_rgba.assign(m->links.size(), {0.5f, 0.5f, 0.5f, -1.0f});
+  o->id = (int)w.objects.size();
+  compute_link_poses(*o, o->link_pose);
+  robot_new_bodies(w, *o);
+  w.objects.push_back(o.release());
+  return (int)w.objects.size() - 1;
+}
 
 extern "C" {
 
@@ -470,26 +485,6 @@ int cn_robot_add_urdf_moved(int wh, const char *xml, const double *pose, int fla
                      base);
   });
 }
-
-}  // extern "C"
-
-static int add_model(World &w, const ModelP &m, const btTransform &base) {
-  std::unique_ptr<Object> o(new Object);
-  o->kind = CN_ARTICULATED;
-  o->model = m;
-  o->base = base;
-  o->group = 32;
-  o->mask = -1;
-  o->q.assign(m->joints.size(), 0.0);
-  o->link_rgba.assign(m->links.size(), {0.5f, 0.5f, 0.5f, -1.0f});
-  o->id = (int)w.objects.size();
-  compute_link_poses(*o, o->link_pose);
-  robot_new_bodies(w, *o);
-  w.objects.push_back(o.release());
-  return (int)w.objects.size() - 1;
-}
-
-extern "C" {
 
 int cn_robot_name(int wh, int r, const char **out) {
   return guard([&] {
