@@ -4,10 +4,16 @@
 (in-package :cram-bullet-reasoning)
 
 (defstruct (kinematic-model (:conc-name km-))
-  "What does not change between copies of an articulated object."
+  "What does not change between copies of an articulated object. Joint names are the URDF
+model's own strings (the IK chains' too), found by identity before they are hashed."
   (urdf nil) (link-names #() :type simple-vector) (link-index (make-hash-table :test 'equal))
   (joint-names #() :type simple-vector) (joint-index (make-hash-table :test 'equal))
-  (joint-info #() :type simple-vector) (rigid-bodies '()))
+  (joint-index-eq (make-hash-table :test 'eq))
+  (joint-info #() :type simple-vector) (rigid-bodies '())
+  ;; per joint: limited (revolute or prismatic with lower < upper) and its limits
+  (limited (make-array 0 :element-type 'bit) :type simple-bit-vector)
+  (lower (make-array 0 :element-type 'double-float) :type (simple-array double-float (*)))
+  (upper (make-array 0 :element-type 'double-float) :type (simple-array double-float (*))))
 
 (defclass robot-object (object)
   ((model :initarg :model :reader %model)
@@ -46,9 +52,14 @@
 
 (defun link-exists-p (robot link) "True when ROBOT has a link LINK." (and (gethash link (km-link-index (%model robot))) t))
 
+(defun model-joint-index (model joint)
+  "Index of JOINT (a name) in the kinematic MODEL, or NIL."
+  (or (gethash joint (km-joint-index-eq model))
+      (gethash joint (km-joint-index model))))
+
 (defun joint-index (robot joint)
   "Index of JOINT (a name) in ROBOT; an error naming both when unknown."
-  (or (gethash joint (km-joint-index (%model robot)))
+  (or (model-joint-index (%model robot) joint)
       (btr-fail "joint ~s is not a joint of ~s" joint (name robot))))
 
 (defun link-pose (robot link)
@@ -78,12 +89,15 @@
 is not meaningful here, they return (values nil nil)."
   (indexed-joint-limits robot (joint-index robot joint)))
 
+(defun indexed-joint-limits-of-info (info)
+  "(values lower upper) of a joint of the plist INFO (NIL NIL unless revolute or prismatic)."
+  (if (member (getf info :type) '(:revolute :prismatic))
+      (values (getf info :lower) (getf info :upper))
+      (values nil nil)))
+
 (defun indexed-joint-limits (robot index)
   "JOINT-LIMITS of ROBOT's joint number INDEX."
-  (let ((info (aref (km-joint-info (%model robot)) index)))
-    (if (member (getf info :type) '(:revolute :prismatic))
-        (values (getf info :lower) (getf info :upper))
-        (values nil nil))))
+  (indexed-joint-limits-of-info (aref (km-joint-info (%model robot)) index)))
 
 (defun joint-lower-limit (robot joint) "Lower limit of JOINT." (nth-value 0 (joint-limits robot joint)))
 (defun joint-upper-limit (robot joint) "Upper limit of JOINT." (nth-value 1 (joint-limits robot joint)))
@@ -104,38 +118,53 @@ joints without limits keep it."
           clamped)
         value)))
 
+(defun joint-state-pair (entry robot)
+  "(name . value) of the joint state ENTRY, (name value) or (name . value)."
+  (cond ((and (consp entry) (consp (cdr entry)) (null (cddr entry)))
+         (cons (first entry) (second entry)))
+        ((and (consp entry) (atom (cdr entry))) entry)
+        (t (btr-fail "joint state ~s, expected (name value)" entry (name robot)))))
+
 (defun set-robot-state-from-joints (joint-states robot)
   "Set joints of ROBOT from JOINT-STATES: a list of (name value) or (name . value), or a hash
 table name → value. All joints are set at once, then links and attached objects move once."
-  (let ((pairs (etypecase joint-states
-                 (hash-table (loop for k being the hash-keys of joint-states using (hash-value v)
-                                   collect (cons k v)))
-                 (list (mapcar (lambda (e)
-                                 (cond ((and (consp e) (consp (cdr e)) (null (cddr e)))
-                                        (cons (first e) (second e)))
-                                       ((and (consp e) (atom (cdr e))) e)
-                                       (t (btr-fail "joint state ~s, expected (name value)" e))))
-                               joint-states)))))
-    (let ((indices (make-array (length pairs) :element-type '(signed-byte 32)))
-          (values (make-array (length pairs) :element-type 'double-float))
-          (names (km-joint-names (%model robot)))
-          (next 0))
-      (declare (type simple-vector names) (type fixnum next))
-      (loop for (n . v) in pairs for i from 0
-            do (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
+  (let* ((pairs (etypecase joint-states
+                  (hash-table (loop for k being the hash-keys of joint-states using (hash-value v)
+                                    collect (cons k v)))
+                  (list joint-states)))
+         (count (length pairs))
+         (model (%model robot))
+         (indices (make-array count :element-type '(signed-byte 32)))
+         (values (make-array count :element-type 'double-float))
+         (names (km-joint-names model))
+         (limited (km-limited model))
+         (lower (km-lower model))
+         (upper (km-upper model))
+         (next 0))
+    (declare (type simple-vector names) (type fixnum next count))
+    (loop for entry in pairs for i of-type fixnum from 0
+          do (destructuring-bind (n . v) (if (hash-table-p joint-states) entry (joint-state-pair entry robot))
+               (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
                (unless (and (finite-real-p v) (< (abs v) 1d6))
                  (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
                ;; the names of a whole state (JOINT-STATES) are the model's own strings, in its
-               ;; order: found a few places after the last one without hashing the name
-               (let ((index (or (loop for k of-type fixnum from next
-                                        below (min (length names) (+ next 8))
-                                      when (eq n (svref names k)) return k)
-                                (joint-index robot n))))
+               ;; order: found a few places after the last one without a table
+               (let* ((index (or (loop for k of-type fixnum from next
+                                         below (min (length names) (+ next 8))
+                                       when (eq n (svref names k)) return k)
+                                 (model-joint-index model n)
+                                 (btr-fail "joint ~s is not a joint of ~s" n (name robot))))
+                      (value (to-double v)))
+                 (declare (type fixnum index) (type double-float value))
                  (setf next (1+ index))
                  (setf (aref indices i) index
-                       (aref values i) (clamp-to-joint-limits robot n (to-double v) index))))
-      (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
-      robot)))
+                       (aref values i) (if (and (= 1 (sbit limited index))
+                                                (or (< value (aref lower index))
+                                                    (> value (aref upper index))))
+                                           (clamp-to-joint-limits robot n value index)
+                                           value)))))
+    (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
+    robot))
 
 ;;; ---- rigid bodies named OBJ.LINK ---------------------------------------------------------------
 
@@ -179,7 +208,24 @@ table name → value. All joints are set at once, then links and attached object
                                                                 collect (native:robot-joint-info w handle i))
                                                           'simple-vector))))
     (loop for l across links for i from 0 do (setf (gethash l (km-link-index model)) i))
-    (loop for j across joints for i from 0 do (setf (gethash j (km-joint-index model)) i))
+    ;; the URDF model's own name strings, those its IK chains carry: found by identity
+    (when (typep urdf 'cl-urdf:robot)
+      (loop for j across joints for i from 0
+            for urdf-joint = (gethash j (cl-urdf:joints urdf))
+            when urdf-joint do (setf (svref joints i) (cl-urdf:name urdf-joint))))
+    (loop for j across joints for i from 0
+          do (setf (gethash j (km-joint-index model)) i
+                   (gethash j (km-joint-index-eq model)) i))
+    (let ((n (length joints)))
+      (setf (km-limited model) (make-array n :element-type 'bit :initial-element 0)
+            (km-lower model) (make-array n :element-type 'double-float :initial-element 0d0)
+            (km-upper model) (make-array n :element-type 'double-float :initial-element 0d0))
+      (dotimes (i n)
+        (multiple-value-bind (lo hi) (indexed-joint-limits-of-info (svref (km-joint-info model) i))
+          (when (and (realp lo) (realp hi) (< lo hi))
+            (setf (sbit (km-limited model) i) 1
+                  (aref (km-lower model) i) (to-double lo)
+                  (aref (km-upper model) i) (to-double hi))))))
     model))
 
 ;;; COMPOUND (default NIL, as CRAM's robot objects): true = each collision mesh of a link is one
