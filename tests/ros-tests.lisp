@@ -104,6 +104,35 @@ unset), restoring the previous values afterwards."
   (signals roslisp-utilities:ros-utilities-error
     (roslisp-utilities:robot-description-string :fallback-file 42)))
 
+;; a fallback file is kept once read, and read again when it changes
+(test robot-description-fallback-file-read-again-when-it-changes
+  (let ((path (uiop:tmpize-pathname (merge-pathnames "cram-plans-fallback.urdf"
+                                                     (uiop:temporary-directory)))))
+    (flet ((write-urdf (name seconds-ago)
+             (with-open-file (s path :direction :output :if-exists :supersede)
+               (format s "<robot name=\"~a\"><link name=\"a\"/></robot>~%" name))
+             ;; the write date as if written SECONDS-AGO
+             (sb-posix:utime (namestring path) (- (get-universal-time) seconds-ago
+                                                  (encode-universal-time 0 0 0 1 1 1970 0))
+                             (- (get-universal-time) seconds-ago
+                                (encode-universal-time 0 0 0 1 1 1970 0))))
+           (read-urdf ()
+             (roslisp-utilities:robot-description-string :parameter "no_such_parameter"
+                                                         :fallback-file path)))
+      (unwind-protect
+           (progn
+             (write-urdf "first" 60)
+             (is (search "\"first\"" (read-urdf)))
+             (is (eq (read-urdf) (read-urdf)))           ; kept
+             (write-urdf "second" 30)                     ; another write date
+             (is (search "\"second\"" (read-urdf)))
+             (write-urdf "third" 0)                       ; written just now: read every time
+             (is (search "\"third\"" (read-urdf)))
+             (is (not (eq (read-urdf) (read-urdf))))
+             (write-urdf "fourth" 0)
+             (is (search "\"fourth\"" (read-urdf))))
+        (ignore-errors (delete-file path))))))
+
 ;;; ---- the master probe and startup without a master --------------------------------------------------
 
 (test ros-master-probe-without-master

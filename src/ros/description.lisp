@@ -24,7 +24,38 @@ repository root (where cram-plans.asd is)."
     (unless (and truename (not (uiop:directory-pathname-p truename)))
       (ros-fail "Parameter ~a is unavailable (~a) and the fallback file ~a (from ~s) does not exist"
                 parameter why path fallback-file))
-    (values (uiop:read-file-string truename) truename)))
+    (values (fallback-file-text truename) truename)))
+
+(defvar *fallback-texts* '()
+  "(truename write-date . text) of the fallback files read last, the latest first: a file is read
+again only when it changed. At most *FALLBACK-TEXTS-KEPT*.")
+
+(defparameter *fallback-texts-kept* 8
+  "How many fallback files' texts *FALLBACK-TEXTS* keeps.")
+
+(defvar *fallback-texts-lock* (sb-thread:make-mutex :name "fallback texts"))
+
+(defun fallback-file-text (truename)
+  "The text of the file TRUENAME, read again only when its write date changed. A write date
+counts whole seconds: a file written in the last two seconds is read every time (a change in
+the same second would not show), and kept once it is older."
+  (let ((date (file-write-date truename)))
+    (sb-thread:with-mutex (*fallback-texts-lock*)
+      (let ((kept (find-if (lambda (e) (and (equal (first e) truename) (eql (second e) date)))
+                           *fallback-texts*)))
+        (cond
+          (kept (cddr kept))
+          ((or (null date) (> date (- (get-universal-time) 2)))
+           (uiop:read-file-string truename))
+          (t
+            (let ((text (uiop:read-file-string truename)))
+              (setf *fallback-texts*
+                    (cons (list* truename date text)
+                          (remove truename
+                                  (subseq *fallback-texts* 0 (min (length *fallback-texts*)
+                                                                  (max 0 (1- *fallback-texts-kept*))))
+                                  :key #'first :test #'equal)))
+              text)))))))
 
 (defun check-urdf-text (text source)
   (unless (and (stringp text) (search "<robot" text))
