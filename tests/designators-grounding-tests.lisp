@@ -75,6 +75,24 @@
     (is (not (null (prolog:prolog `(desig:loc-desig? ,d)))))
     (is (null (prolog:prolog `(desig:action-desig? ,d))))))
 
+;; desig-prop gives the entries of a key in the order of the description, unifies the value
+;; with what is asked, and matches no entry of another form
+(test desig-prop-entries-in-order
+  (let ((d (desig:an action (type picking-up) (arm left) (grasp front) (arm right))))
+    (flet ((values-of (goal var)
+             (mapcar (lambda (b) (cut:var-value var b)) (cut:force-ll (prolog:prolog goal)))))
+      (is (equal '(:left :right) (values-of `(desig:desig-prop ,d (:arm ?v)) '?v)))
+      (is (equal '((:type :picking-up) (:arm :left) (:grasp :front) (:arm :right))
+                 (values-of `(desig:desig-prop ,d ?p) '?p)))
+      (is (equal '(:arm) (values-of `(desig:desig-prop ,d (?k :right)) '?k)))
+      (is (equal '(:type :arm :grasp :arm) (values-of `(desig:desig-prop ,d (?k ?_)) '?k)))
+      (is (equal '(:left) (values-of `(and (desig:desig-prop ,d (:arm ?v)) (cut)) '?v)))
+      (is (null (prolog:prolog `(desig:desig-prop ,d (:arm :front)))))
+      (is (null (prolog:prolog `(desig:desig-prop ,d (:color ?c)))))
+      (is (null (prolog:prolog `(desig:desig-prop ,d (:arm)))))
+      (is (null (prolog:prolog '(desig:desig-prop not-a-designator (:arm ?v)))))
+      (is (null (prolog:prolog '(desig:desig-prop ?unbound (:arm ?v))))))))
+
 ;;; Location designators
 
 (defvar *generated-candidates* 0)

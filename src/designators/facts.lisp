@@ -30,10 +30,22 @@
     (desig-prop ?designator (:poses ?poses))
     (member ?pose ?poses)))
 
+(def-native-predicate desig-prop (m cont designator property)
+  ;; (desig-prop ?designator (?key ?value)): each (key value) entry of a bound designator's
+  ;; description that unifies with the property, in the description's order; with a keyword key
+  ;; the entries of other keys are passed over without being unified (the grounding rules ask
+  ;; for one key of each designator they are tried on)
+  (let ((d (deref-term designator)))
+    (when (typep d 'designator)
+      (let* ((p (deref-term property))
+             (key (and (consp p) (let ((k (deref-term (car p)))) (and (keywordp k) k)))))
+        (unify-each m p (loop for e in (description d)
+                              when (and (consp e) (consp (cdr e)) (null (cddr e))
+                                        (or (null key) (eq (car e) key)))
+                                collect e)
+                    cont)))))
+
 (def-fact-group designator-inspection ()
-  (<- (desig-prop ?designator (?key ?value))
-    (designator-entries ?designator ?entries)
-    (member (?key ?value) ?entries))
   (<- (designator ?type ?description ?designator)
     (lisp-fun make-designator ?type ?description ?designator))
   (<- (desig-description ?designator ?description)
