@@ -430,6 +430,28 @@ sink behind it; either way the held object ends where it was, attached to the sa
            (is (plusp (check :fail)) "paths checked under :fail"))
       (sb-int:unencapsulate 'urdf-proj:robot-sweeps 'count-calls))))
 
+(test pre-checks-solve-ik-with-fewer-restarts-than-the-motions
+  ;; the coarse pre-checks give each IK call *PRECHECK-IK-RESTARTS* random restarts, the
+  ;; motions URDF-PROJ::*REACH-IK-RESTARTS*
+  (setup *island*)
+  (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map (apply #'pose *robot-at-island*)))
+  (let ((restarts '()))
+    (sb-int:encapsulate 'urdf-proj::chain-ik-from-map 'note-restarts
+                        (lambda (f &rest args) (push (car (last args)) restarts) (apply f args)))
+    (unwind-protect
+         (flet ((restarts-of (coarse)
+                  (setf restarts '())
+                  (handler-case
+                      (urdf-proj:with-simulated-robot
+                        (fd-plans::check-picking-up-collisions
+                         (desig:an object (type bottle) (name object-1)) :any (and coarse :coarse)))
+                    (common-fail:object-unreachable () nil))
+                  (remove-duplicates restarts)))
+           (is (equal (list fd-plans::*precheck-ik-restarts*) (restarts-of t)))
+           (is (equal (list urdf-proj::*reach-ik-restarts*) (restarts-of nil)))
+           (is (< fd-plans::*precheck-ik-restarts* urdf-proj::*reach-ik-restarts*)))
+      (sb-int:unencapsulate 'urdf-proj::chain-ik-from-map 'note-restarts))))
+
 (test a-location-next-to-an-object-is-certain-once-the-object-was-found
   (setup *island*)
   (let* ((?object (desig:an object (type bottle)))

@@ -8,6 +8,10 @@
 
 (defparameter *torso-step* 0.1d0 "Step (metres or radians) of the torso values MOVE-TCP tries.")
 
+(defparameter *reach-ik-restarts* 8
+  "Random restarts of each IK call MOVE-TCP makes for a candidate base offset and torso value,
+after the attempt from the arm's joints as they are.")
+
 (defparameter *collision-modes* '(nil :avoid-all :allow-all :allow-hand :allow-fingers :allow-arm
                                   :allow-attached)
   "The collision modes of MOVE-TCP.")
@@ -413,7 +417,8 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
             (let* ((position-error 0d0) (rotation-error 0d0)
                    (solutions (loop for (nil pose chain ee first-child seed) in ee-goals
                                     for (q pe re) = (multiple-value-list
-                                                     (chain-ik-from-map chain ee first-child pose robot seed 8))
+                                                     (chain-ik-from-map chain ee first-child pose robot seed
+                                                                        *reach-ik-restarts*))
                                     unless q do (return nil)
                                     do (setf position-error (max position-error pe)
                                              rotation-error (max rotation-error re))

@@ -27,6 +27,12 @@ reverse, and gives up an unreachable pose sooner.")
   "The step (metres) between the torso heights the pre-checks try, coarser than the motions'
 (URDF-PROJ::*TORSO-STEP*).")
 
+(defparameter *precheck-ik-restarts* 3
+  "Random restarts of each IK call of the coarse pre-checks (the motions make
+URDF-PROJ::*REACH-IK-RESTARTS*, 8): of the goals the pre-checks of seeded household runs
+reached, 1 % needed more than 3 restarts, and a goal that no start reaches takes 4 descents
+instead of 9.")
+
 (defun tcp-poses-reachable-p (arm poses &key (coarse t))
   "True when the tool frame of ARM reaches each of POSES in turn in the belief state as the
 moving-tcp motion would (base offsets, torso heights, collision check; with COARSE, only the
@@ -41,6 +47,8 @@ itself reports them, when it is performed."
           (let ((urdf-proj::*base-offsets* (if coarse *precheck-base-offsets*
                                                urdf-proj::*base-offsets*))
                 (urdf-proj::*torso-step* (if coarse *precheck-torso-step* urdf-proj::*torso-step*))
+                (urdf-proj::*reach-ik-restarts* (if coarse *precheck-ik-restarts*
+                                                    urdf-proj::*reach-ik-restarts*))
                 (urdf-proj:*sweep-check* (and (eq urdf-proj:*sweep-check* :fail) :fail)))
             (dolist (pose poses t)
               (urdf-proj::reach-tcp-poses (list (cons arm (pp-plans:pose-in-map pose))) nil t nil))))
