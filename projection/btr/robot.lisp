@@ -123,7 +123,7 @@ joints without limits keep it."
   (cond ((and (consp entry) (consp (cdr entry)) (null (cddr entry)))
          (cons (first entry) (second entry)))
         ((and (consp entry) (atom (cdr entry))) entry)
-        (t (btr-fail "joint state ~s, expected (name value)" entry (name robot)))))
+        (t (btr-fail "joint state ~s of ~s, expected (name value)" entry (name robot)))))
 
 (defun set-robot-state-from-joints (joint-states robot)
   "Set joints of ROBOT from JOINT-STATES: a list of (name value) or (name . value), or a hash
