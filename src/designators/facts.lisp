@@ -3,13 +3,6 @@
 
 (in-package :cram-designators)
 
-(def-native-predicate designator-entries (m cont designator entries)
-  ;; (designator-entries ?designator ?entries): the description of a bound designator
-  (let ((d (deref-term designator)))
-    (when (typep d 'designator)
-      (and (unify-terms m entries (description d))
-           (solve-continue cont)))))
-
 (def-fact-group designator-grounding-interfaces (action-grounding motion-grounding
                                                  location-grounding)
   ;; (action-grounding ?designator ?grounding): ?grounding is (plan-function resolved-designator)
