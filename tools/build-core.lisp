@@ -64,10 +64,10 @@ RESET-PROJECTION.)"
            (dolist (s '(btw-tut::*robot-urdf* btw-tut::*kitchen-urdf*)) (setf (symbol-value s) nil))
            (btw-tut:init-projection)
            (sb-int:unencapsulate 'cl-urdf:parse-urdf 'record)
+           (setf *preparsed-urdfs* (reverse parsed))
            ;; not a run anyone replays: the recorder (whose setting the plan's threads read
            ;; globally) is off, so it records no run and the new process numbers its runs from 1
-           (let ((*preparsed-urdfs* (reverse parsed))
-                 (record cram-viewer:*record-runs*))
+           (let ((record cram-viewer:*record-runs*))
              (setf cram-viewer:*record-runs* nil)
              (unwind-protect
                   (progn
@@ -82,8 +82,7 @@ RESET-PROJECTION.)"
             do (if v (setf (symbol-value s) (first v)) (makunbound s)))
       (setf *random-state* (first random-states)
             urdf-proj:*ik-random-state* (second random-states)
-            costmap:*costmap-random-state* (third random-states)))
-    (setf *preparsed-urdfs* (reverse parsed))))
+            costmap:*costmap-random-state* (third random-states)))))
 
 (defun neutralize-worlds ()
   "Destroy every Lisp world object's native world and give it the handle -1: a new process

@@ -469,7 +469,7 @@ int cn_chain_reach_map_get(int h, double *out_params, unsigned char *out_cells, 
     const ReachMap &m = reach_map(c);
     m.save(reach_joints(c), c.tip_p, out_params);
     const std::vector<unsigned char> &cells = m.cells();
-    std::memcpy(out_cells, cells.data(), std::min(cells.size(), (size_t)cap));
+    if (cap > 0) std::memcpy(out_cells, cells.data(), std::min(cells.size(), (size_t)cap));
     return (int)cells.size();
   });
 }

@@ -48,14 +48,12 @@ the same second would not show), and kept once it is older."
           ((or (null date) (> date (- (get-universal-time) 2)))
            (uiop:read-file-string truename))
           (t
-            (let ((text (uiop:read-file-string truename)))
-              (setf *fallback-texts*
-                    (cons (list* truename date text)
-                          (remove truename
-                                  (subseq *fallback-texts* 0 (min (length *fallback-texts*)
-                                                                  (max 0 (1- *fallback-texts-kept*))))
-                                  :key #'first :test #'equal)))
-              text)))))))
+           (let ((text (uiop:read-file-string truename))
+                 (others (remove truename *fallback-texts* :key #'first :test #'equal)))
+             (setf *fallback-texts*
+                   (cons (list* truename date text)
+                         (subseq others 0 (min (length others) (max 0 (1- *fallback-texts-kept*))))))
+             text)))))))
 
 (defun check-urdf-text (text source)
   (unless (and (stringp text) (search "<robot" text))
