@@ -141,3 +141,26 @@
       (is (= 2 (length colours)) "one colour per drawn link: ~s" colours)
       (is (equal (mapcar (lambda (i) (btr:object-color lamp i)) drawn) colours)))
     (btr:destroy-world w)))
+
+(test a-change-wakes-the-threads-waiting-for-one
+  ;; the live page's streams wait in WAIT-FOR-CHANGE; a change made while one waits wakes it
+  ;; long before its timeout, and the waiter count is back to zero afterwards
+  (let* ((before cram-viewer::*generation*)
+         (result nil)
+         (waiter (sb-thread:make-thread
+                  (lambda ()
+                    (let ((start (get-internal-real-time)))
+                      (setf result (list (cram-viewer::wait-for-change before 30)
+                                         (/ (- (get-internal-real-time) start)
+                                            internal-time-units-per-second)))))
+                  :name "viewer change waiter")))
+    (loop repeat 500 until (plusp cram-viewer::*generation-waiters*) do (sleep 0.01))
+    (is (= 1 cram-viewer::*generation-waiters*))
+    (cram-viewer::bump-generation)
+    (sb-thread:join-thread waiter)
+    (is (= (1+ before) (first result)))
+    (is (< (second result) 10))
+    (is (zerop cram-viewer::*generation-waiters*))
+    ;; nobody waits: a change is still counted
+    (cram-viewer::bump-generation)
+    (is (= (+ 2 before) cram-viewer::*generation*))))

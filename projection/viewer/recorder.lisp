@@ -52,18 +52,29 @@ but the last few).")
 (defvar *generation* 0
   "Incremented whenever a step is recorded or an overlay changes: the live viewer waits on it.")
 (defvar *generation-queue* (sb-thread:make-waitqueue :name "viewer generation"))
+(defvar *generation-waiters* 0
+  "How many threads wait in WAIT-FOR-CHANGE (under *RECORDER-LOCK*): a change wakes the queue
+only when someone waits on it, so a run nobody watches makes no wake-up system call.")
+
+(defun note-change ()
+  "With *RECORDER-LOCK* held: count a change and wake the threads waiting for one."
+  (incf *generation*)
+  (when (plusp *generation-waiters*)
+    (sb-thread:condition-broadcast *generation-queue*)))
 
 (defun bump-generation ()
   "Note a change and wake the live viewer's streams."
   (sb-thread:with-mutex (*recorder-lock*)
-    (incf *generation*)
-    (sb-thread:condition-broadcast *generation-queue*)))
+    (note-change)))
 
 (defun wait-for-change (generation timeout)
   "Wait up to TIMEOUT seconds until *GENERATION* differs from GENERATION; return it."
   (sb-thread:with-mutex (*recorder-lock*)
     (when (= generation *generation*)
-      (sb-thread:condition-wait *generation-queue* *recorder-lock* :timeout timeout))
+      (incf *generation-waiters*)
+      (unwind-protect
+           (sb-thread:condition-wait *generation-queue* *recorder-lock* :timeout timeout)
+        (decf *generation-waiters*)))
     *generation*))
 
 (defun recorded-runs ()
@@ -168,8 +179,8 @@ heap.")
              (native:world-alive-p (btr:world-handle world)))
     (let ((node cpl:*task-tree-node*))
       (multiple-value-bind (names state) (capture-state world)
-        (prog1
-            (sb-thread:with-mutex (*recorder-lock*)
+        (sb-thread:with-mutex (*recorder-lock*)
+          (prog1
               (let ((run (current-run (task-root node) world)))
                 (setf (run-world-handle run) (btr:world-handle world))
                 (when (< (fill-pointer (run-steps run)) *max-steps-per-run*)
@@ -185,8 +196,8 @@ heap.")
                                           :overlays (reverse *pending-overlays*))))
                     (setf *pending-overlays* '())
                     (vector-push-extend step (run-steps run))
-                    step))))
-          (bump-generation))))))
+                    step)))
+            (note-change)))))))
 
 (defun step-failed-p (step)
   "True when the motion of STEP failed (its task tree node says so)."
