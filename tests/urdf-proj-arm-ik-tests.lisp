@@ -88,3 +88,44 @@
                              (find (car (cram-native:chain-reach-map (urdf-proj::ik-chain-native left)))
                                    urdf-proj::*kept-reach-maps* :key #'car :test #'equalp)))))
           (sb-int:unencapsulate 'urdf-proj::install-kept-reach-map 'count))))))
+
+(test search-lookups-read-the-joints-as-they-are
+  (with-kitchen
+    (let* ((robot (robot))
+           (chain (urdf-proj:arm-ik-chain :left robot))
+           (joints (cram-native:robot-joints (btr::whandle robot) (btr:object-handle robot))))
+      ;; the seed from the joint vector is each chain joint's own value
+      (is (equal (map 'list (lambda (j) (btr:joint-state robot j)) (urdf-proj:ik-chain-joint-names chain))
+                 (urdf-proj::chain-joint-values chain robot joints)))
+      ;; the torso values: the same list again for the same torso, new ones once it moved
+      (let* ((torso (urdf-proj:torso-joint))
+             (before (btr:joint-state robot torso))
+             (first (urdf-proj::torso-candidates robot nil)))
+        (is (= before (first first)))
+        (is (eq first (urdf-proj::torso-candidates robot nil)))
+        (is (equal (list before) (urdf-proj::torso-candidates robot t)))
+        (unwind-protect
+             (let ((moved (+ before (if (> before 0.1d0) -0.05d0 0.05d0))))
+               (btr:set-robot-state-from-joints (list (list torso moved)) robot)
+               (let ((second (urdf-proj::torso-candidates robot nil)))
+                 (is (= moved (first second)))
+                 (is (not (eq first second)))
+                 (is (equal (sort (copy-list second) #'<)
+                            (sort (copy-list (urdf-proj::torso-values moved
+                                                                      (btr:joint-lower-limit robot torso)
+                                                                      (btr:joint-upper-limit robot torso)))
+                                  #'<)))))
+          (btr:set-robot-state-from-joints (list (list torso before)) robot))))
+    ;; a robot state put back from its vectors: base and every joint as they were
+    (let* ((robot (robot))
+           (state (urdf-proj::robot-state-vectors robot))
+           (pose (btr:pose robot))
+           (joints (btr:joint-states robot)))
+      (setf (btr:pose robot) (cl-transforms:make-pose (cl-transforms:make-3d-vector 0.3 0.2 0)
+                                                      (cl-transforms:make-identity-rotation)))
+      (btr:set-robot-state-from-joints '(("l_elbow_flex_joint" -1.0d0) ("torso_lift_joint" 0.2d0)) robot)
+      (urdf-proj::restore-robot-state robot state)
+      (is (< (btr::pose-distance pose (btr:pose robot)) 1d-12))
+      (is (equal joints (btr:joint-states robot)))
+      (is (eq (urdf-proj::all-joint-indices 5) (urdf-proj::all-joint-indices 5)))
+      (is (equalp #(0 1 2 3 4) (urdf-proj::all-joint-indices 5))))))

@@ -92,6 +92,12 @@ the child link of its first joint FIRST-CHILD (quick checks, before anything is 
        (cl-transforms:transform* (cl-transforms:transform-inv (cl-transforms:pose->transform base-pose))
                                  tip-goal)))))
 
+(defun chain-joint-values (chain robot joints)
+  "The values of CHAIN's joints, in its order, read from JOINTS: every joint value of ROBOT in
+index order (CRAM-NATIVE:ROBOT-JOINTS)."
+  (declare (type (simple-array double-float (*)) joints))
+  (map 'list (lambda (j) (aref joints (btr::joint-index robot j))) (ik-chain-joint-names chain)))
+
 (defun chain-ik-from-map (chain ee first-child ee-map-pose robot seed max-restarts)
   "ARM-IK with what depends on the arm alone given: its CHAIN, its end-effector link EE and
 the child link of the chain's first joint FIRST-CHILD."
@@ -127,26 +133,41 @@ or attached objects when *BE-STRICT-WITH-COLLISIONS* is true and allow everythin
                              (:allow-arm (append (hand-links arm robot)
                                                  (rob-int:get-arm-links (robot-name) arm)))))))))))
 
+(defvar *torso-candidates* '()
+  "(key . candidates): the last answer of TORSO-CANDIDATES, KEY the URDF, the torso joint, its
+value, the limits and *TORSO-STEP* it was made for.")
+
 (defun torso-candidates (robot fixed-torso)
   "Torso values to try: the current one, then steps of *TORSO-STEP* within the limits by
-distance. NIL when the robot has no movable torso."
+distance. NIL when the robot has no movable torso. Not to be modified (the last answer is
+given again for the same torso value, limits and step)."
   (let ((joint (torso-joint)))
     (when (movable-joint-p robot joint)
       (let ((current (btr:joint-state robot joint)))
         (if fixed-torso
             (list current)
             (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
-              (let ((values (list current)))
-                (loop for k from 1 to 100
-                      for up = (+ current (* k *torso-step*))
-                      for down = (- current (* k *torso-step*))
-                      while (or (<= up (+ hi 1d-9)) (>= down (- lo 1d-9)))
-                      do (when (>= down (- lo 1d-9)) (push down values))
-                         (when (<= up (+ hi 1d-9)) (push up values)))
-                (dolist (limit (list lo hi))
-                  (unless (find limit values :test (lambda (a b) (< (abs (- a b)) 0.02d0)))
-                    (push limit values)))
-                (stable-sort (nreverse values) #'< :key (lambda (v) (abs (- v current)))))))))))
+              (let ((key (list (btr:urdf robot) joint current lo hi *torso-step*))
+                    (last *torso-candidates*))
+                (if (and last (equal (car last) key))
+                    (cdr last)
+                    (let ((values (torso-values current lo hi)))
+                      (setf *torso-candidates* (cons key values))
+                      values)))))))))
+
+(defun torso-values (current lo hi)
+  "The torso values of TORSO-CANDIDATES for the torso at CURRENT with the limits LO and HI."
+  (let ((values (list current)))
+    (loop for k from 1 to 100
+          for up = (+ current (* k *torso-step*))
+          for down = (- current (* k *torso-step*))
+          while (or (<= up (+ hi 1d-9)) (>= down (- lo 1d-9)))
+          do (when (>= down (- lo 1d-9)) (push down values))
+             (when (<= up (+ hi 1d-9)) (push up values)))
+    (dolist (limit (list lo hi))
+      (unless (find limit values :test (lambda (a b) (< (abs (- a b)) 0.02d0)))
+        (push limit values)))
+    (stable-sort (nreverse values) #'< :key (lambda (v) (abs (- v current))))))
 
 (defvar *base-candidates* (cons nil nil)
   "(offsets . candidates): the base offsets BASE-CANDIDATES sorted last, for a copy of the
@@ -339,6 +360,8 @@ other candidate is tried. Signals MANIPULATION-POSE-UNREACHABLE (state restored)
 passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off their goals."
   (let* ((robot (robot-object))
          (arms (mapcar #'car goals))
+         ;; the base pose and every joint as they are: a search that fails puts them back
+         (state0 (robot-state-vectors robot))
          ;; (arm ee-pose chain end-effector-link first-joint-child) per goal: what ARM-IK looks up
          ;; and, last, the IK seed: the arm's joints as they are, which every candidate starts
          ;; from (a candidate that fails puts them back)
@@ -346,17 +369,15 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                              (let* ((arm (car g)) (chain (arm-ik-chain arm robot)))
                                (list arm (tcp->ee-pose arm (cdr g) robot) chain
                                      (end-effector-link arm) (first-joint-child chain robot)
-                                     (map 'list (lambda (j) (btr:joint-state robot j))
-                                          (ik-chain-joint-names chain)))))
+                                     (chain-joint-values chain robot (cdr state0)))))
                            goals))
          (base0 (btr:pose robot))
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
-         (state0 (btr:joint-states robot))
          ;; what a candidate changes besides the torso, which each candidate sets itself
          (arms0 (loop for (nil nil chain nil nil seed) in ee-goals
                       append (map 'list #'list (ik-chain-joint-names chain) seed)))
-         (sweep-start (and *sweep-check* (robot-state-vectors robot)))
+         (sweep-start (and *sweep-check* state0))
          (goal-checked (not (member collision-mode '(nil :avoid-all))))
          ;; under the strict check, once a goal is known not to be hopeless: a base offset at
          ;; which a link that only the base moves touches something passes its candidates over
@@ -385,8 +406,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                        (unless ok (setf swept sweeps))
                        ok))
             (return-from search t))
-          (setf (btr:pose robot) base0)
-          (btr:set-robot-state-from-joints state0 robot)))
+          (restore-robot-state robot state0)))
       (block candidates
         ;; where each goal's shoulder would be for each torso value: candidates whose goals
         ;; are out of the arm's reach are passed over without setting the robot's state
@@ -441,8 +461,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
                                                                position-error rotation-error))))
                     (btr:set-robot-state-from-joints arms0 robot)
                     (when hopeless (return-from candidates))))))))))))
-      (setf (btr:pose robot) base0)
-      (btr:set-robot-state-from-joints state0 robot)
+      (restore-robot-state robot state0)
       (report-sweeps swept :robot robot :before sweep-start)  ; signals under :fail
       (cpl:fail 'common-fail:manipulation-pose-unreachable
                 :description (lambda ()

@@ -72,14 +72,27 @@ arithmetic, as every motion's check compares its two states."
 (defun same-state-p (a b)
   (and (same-doubles-or-numbers-p (car a) (car b)) (same-doubles-or-numbers-p (cdr a) (cdr b))))
 
+(sb-ext:defglobal **joint-index-vectors** (make-array 0)
+  "Index vectors 0 .. n-1 (IVECs) by length n, made once each: RESTORE-ROBOT-STATE sets every
+joint of a robot at once.")
+
+(defun all-joint-indices (n)
+  "The IVEC 0 .. N-1 (shared, not to be modified)."
+  (declare (type (integer 0 100000) n))
+  (let ((table **joint-index-vectors**))
+    (or (and (< n (length table)) (svref table n))
+        (let ((v (make-array n :element-type '(signed-byte 32)))
+              (new (replace (make-array (max (1+ n) (length table)) :initial-element nil) table)))
+          (dotimes (i n) (setf (aref v i) i))
+          (setf (svref new n) v
+                **joint-index-vectors** new)
+          v))))
+
 (defun restore-robot-state (robot state)
   "Put ROBOT back to STATE (from ROBOT-STATE-VECTORS)."
   (let ((w (btr:world-handle (btr:world robot))) (h (btr:object-handle robot)))
     (cram-native:set-object-pose w h (car state))
-    (let ((n (length (cdr state))))
-      (cram-native:set-robot-joints w h (let ((v (make-array n :element-type '(signed-byte 32))))
-                                     (dotimes (i n v) (setf (aref v i) i)))
-                               (cdr state)))))
+    (cram-native:set-robot-joints w h (all-joint-indices (length (cdr state))) (cdr state))))
 
 ;;; ---- what a motion is meant to touch ------------------------------------------------------------
 

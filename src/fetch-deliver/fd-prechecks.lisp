@@ -12,11 +12,9 @@
 (defun call-restoring-robot (thunk)
   "Call THUNK and put the robot's base, joints and attached objects back afterwards."
   (let* ((robot (btr:get-robot-object))
-         (base (btr:pose robot))
-         (state (btr:joint-states robot)))
+         (state (urdf-proj::robot-state-vectors robot)))
     (unwind-protect (funcall thunk)
-      (setf (btr:pose robot) base)
-      (btr:set-robot-state-from-joints state robot))))
+      (urdf-proj::restore-robot-state robot state))))
 
 (defparameter *precheck-base-offsets* '(0d0 -0.1d0 0.1d0)
   "The base offsets (metres) the pre-checks try, fewer than the motions do
