@@ -161,6 +161,25 @@
       (btr:remove-object w :lifter)
       (signals error (btr:link-aabbs lifter)))))
 
+(test an-indexed-joint-is-set-as-by-name
+  (let ((w (small-world)))
+    (btr:add-object w :urdf :lifter '((2 0 0) (0 0 0 1)) :urdf *arm-urdf*)
+    (let* ((lifter (btr:object w :lifter))
+           (index (btr::joint-index lifter "lift")))
+      (btr::set-indexed-joint lifter index 0.2d0)
+      (is (= 0.2d0 (btr:joint-state lifter "lift")))
+      (is (< (abs (- 0.5d0 (cl-transforms:z (cl-transforms:origin (btr:link-pose lifter "hand"))))) 1d-9))
+      ;; within a hair of the limit: clamped without a word, as by name
+      (btr::set-indexed-joint lifter index (+ 0.5d0 1d-9))
+      (is (= 0.5d0 (btr:joint-state lifter "lift")))
+      ;; a value that is no number is named with the joint and the object
+      (let ((e (handler-case (progn (btr::set-indexed-joint lifter index :up) nil)
+                 (btr:btr-error (e) e))))
+        (is (not (null e)))
+        (is (search "lift" (princ-to-string e)))
+        (is (search ":UP" (princ-to-string e))))
+      (is (= 0.5d0 (btr:joint-state lifter "lift"))))))
+
 (test bad-poses-are-named-after-the-object
   (let* ((w (small-world)) (cup (btr:object w 'cup)))
     (flet ((message (pose)

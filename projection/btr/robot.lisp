@@ -125,6 +125,24 @@ joints without limits keep it."
         ((and (consp entry) (atom (cdr entry))) entry)
         (t (btr-fail "joint state ~s of ~s, expected (name value)" entry (name robot)))))
 
+(defun set-indexed-joint (robot index value)
+  "Set ROBOT's joint number INDEX to VALUE (a real), as SET-ROBOT-STATE-FROM-JOINTS sets one
+joint (clamped into its limits, links and attached objects moved), for a caller that knows the
+joint's index and sets it many times."
+  (let ((model (%model robot)))
+    (declare (type fixnum index))
+    (unless (and (finite-real-p value) (< (abs value) 1d6))
+      (btr-fail "joint ~s of ~s: value ~s, expected a finite real"
+                (svref (km-joint-names model) index) (name robot) value))
+    (setf value (to-double value))
+    (when (and (= 1 (sbit (km-limited model) index))
+               (or (< value (aref (km-lower model) index)) (> value (aref (km-upper model) index))))
+      (setf value (clamp-to-joint-limits robot (svref (km-joint-names model) index) value index)))
+    (let ((indices (make-array 1 :element-type '(signed-byte 32) :initial-element index))
+          (values (make-array 1 :element-type 'double-float :initial-element value)))
+      (native:set-robot-joints (whandle robot) (object-handle robot) indices values))
+    robot))
+
 (defun set-robot-state-from-joints (joint-states robot)
   "Set joints of ROBOT from JOINT-STATES: a list of (name value) or (name . value), or a hash
 table name → value. All joints are set at once, then links and attached objects move once."

@@ -374,6 +374,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
          (base0 (btr:pose robot))
          (torso (torso-joint))
          (torsos (or (torso-candidates robot fixed-torso) (list nil)))
+         (torso-index (and torso (some #'identity torsos) (btr::joint-index robot torso)))
          ;; what a candidate changes besides the torso, which each candidate sets itself
          (arms0 (loop for (nil nil chain nil nil seed) in ee-goals
                       append (map 'list #'list (ik-chain-joint-names chain) seed)))
@@ -423,7 +424,7 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
             (unless placed
               (setf (btr:pose robot) (offset-base-pose base0 (first offset) (second offset))
                     placed t))
-            (when torso-value (btr:set-robot-state-from-joints (list (list torso torso-value)) robot))
+            (when torso-value (btr::set-indexed-joint robot torso-index torso-value))
             (if (and fixed-links-check goal-checked
                      (if (eq base-blocked :unknown)
                          (setf base-blocked

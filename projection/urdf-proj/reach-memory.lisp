@@ -110,9 +110,13 @@ with FIXED-TORSO, without moving the joint TORSO; NIL when there is none."
 GOALS (a REACH-GOALS-KEY) in *REACH-MEMORY*, newest first, up to *REACH-MEMORY-SIZE*."
   (let ((memory *reach-memory*))
     (when memory
-      (let ((entry (make-reach-state robot goals base joints)))
+      (let* ((entry (make-reach-state robot goals base joints))
+             (hash (reach-state-hash entry)))
         (sb-thread:with-mutex ((reach-memory-lock memory))
-          (let ((entries (cons entry (remove-if (lambda (e) (and (eq (reach-state-robot e) robot)
+          ;; an older state for the same goals goes (the hashes compared first, as RECALL-REACH-STATE
+          ;; compares them: an entry it cannot find again is left to age out)
+          (let ((entries (cons entry (remove-if (lambda (e) (and (= (reach-state-hash e) hash)
+                                                                  (eq (reach-state-robot e) robot)
                                                                   (same-goals-p (reach-state-goals e) goals)))
                                                 (reach-memory-entries memory)))))
             (setf (reach-memory-entries memory)
