@@ -129,3 +129,25 @@
       (is (equal joints (btr:joint-states robot)))
       (is (eq (urdf-proj::all-joint-indices 5) (urdf-proj::all-joint-indices 5)))
       (is (equalp #(0 1 2 3 4) (urdf-proj::all-joint-indices 5))))))
+
+(test base-offset-shifts-are-kept-for-the-same-heading
+  (let* ((candidates (urdf-proj::base-candidates t))
+         (a (cl-transforms:make-pose (cl-transforms:make-3d-vector 1 2 0)
+                                     (cl-transforms:axis-angle->quaternion
+                                      (cl-transforms:make-3d-vector 0 0 1) 0.7d0)))
+         (b (cl-transforms:make-pose (cl-transforms:make-3d-vector -1 0 0)
+                                     (cl-transforms:orientation a)))
+         (c (cl-transforms:make-pose (cl-transforms:make-3d-vector 1 2 0)
+                                     (cl-transforms:axis-angle->quaternion
+                                      (cl-transforms:make-3d-vector 0 0 1) -0.2d0)))
+         (shifts (urdf-proj::base-offset-shifts a candidates)))
+    (is (= (length candidates) (length shifts)))
+    (is (every (lambda (o s) (equalp s (urdf-proj::base-offset-shift a (first o) (second o))))
+               candidates shifts))
+    ;; another position with the same heading: the same shifts, not made again
+    (is (eq shifts (urdf-proj::base-offset-shifts b candidates)))
+    ;; another heading: made again, and right for it
+    (let ((turned (urdf-proj::base-offset-shifts c candidates)))
+      (is (not (eq shifts turned)))
+      (is (every (lambda (o s) (equalp s (urdf-proj::base-offset-shift c (first o) (second o))))
+                 candidates turned)))))

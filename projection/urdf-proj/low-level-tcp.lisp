@@ -133,26 +133,28 @@ or attached objects when *BE-STRICT-WITH-COLLISIONS* is true and allow everythin
                              (:allow-arm (append (hand-links arm robot)
                                                  (rob-int:get-arm-links (robot-name) arm)))))))))))
 
-(defvar *torso-candidates* '()
-  "(key . candidates): the last answer of TORSO-CANDIDATES, KEY the URDF, the torso joint, its
-value, the limits and *TORSO-STEP* it was made for.")
+(defvar *torso-candidates* nil
+  "NIL, or #(urdf joint value step candidates): the last answer of TORSO-CANDIDATES, for the
+URDF, the torso joint and its value and the *TORSO-STEP* it was made for (the joint's limits
+are the URDF's).")
 
 (defun torso-candidates (robot fixed-torso)
   "Torso values to try: the current one, then steps of *TORSO-STEP* within the limits by
 distance. NIL when the robot has no movable torso. Not to be modified (the last answer is
-given again for the same torso value, limits and step)."
+given again for the same torso value and step)."
   (let ((joint (torso-joint)))
     (when (movable-joint-p robot joint)
       (let ((current (btr:joint-state robot joint)))
         (if fixed-torso
             (list current)
-            (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
-              (let ((key (list (btr:urdf robot) joint current lo hi *torso-step*))
-                    (last *torso-candidates*))
-                (if (and last (equal (car last) key))
-                    (cdr last)
+            (let ((last *torso-candidates*)
+                  (urdf (btr:urdf robot)))
+              (if (and last (eq (svref last 0) urdf) (equal (svref last 1) joint)
+                       (= (svref last 2) current) (= (svref last 3) *torso-step*))
+                  (svref last 4)
+                  (multiple-value-bind (lo hi) (btr:joint-limits robot joint)
                     (let ((values (torso-values current lo hi)))
-                      (setf *torso-candidates* (cons key values))
+                      (setf *torso-candidates* (vector urdf joint current *torso-step* values))
                       values)))))))))
 
 (defun torso-values (current lo hi)
@@ -305,6 +307,23 @@ from BASE to OFFSET-BASE-POSE BASE DX DY."
                                           (float (cl-transforms:y v) 1d0)
                                           (float (cl-transforms:z v) 1d0)))))
 
+(defvar *base-offset-shifts* nil
+  "(orientation candidates . shifts): the last answer of BASE-OFFSET-SHIFTS, for the base
+orientation (its four numbers) and the list of base candidates it was made for.")
+
+(defun base-offset-shifts (base candidates)
+  "BASE-OFFSET-SHIFT of BASE for each (dx dy) of CANDIDATES (a list BASE-CANDIDATES gave), in
+order: made again only for another base orientation or list (the searches of a pre-check all
+start from the base pose it stands at). Not to be modified."
+  (let* ((q (cl-transforms:orientation base))
+         (key (list (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q)))
+         (last *base-offset-shifts*))
+    (if (and last (eq (second last) candidates) (equal (first last) key))
+        (cddr last)
+        (let ((shifts (mapcar (lambda (o) (base-offset-shift base (first o) (second o))) candidates)))
+          (setf *base-offset-shifts* (list* key candidates shifts))
+          shifts))))
+
 (defun goals-within-reach-p (shoulders shift ee-goals)
   "False when a goal of EE-GOALS lies farther from its shoulder (SHOULDERS, one position or
 NIL per goal, moved by SHIFT) than its chain reaches, with the 5 cm to spare of
@@ -412,9 +431,12 @@ passes, and MANIPULATION-GOAL-NOT-REACHED when the reached tool frames are off t
         ;; where each goal's shoulder would be for each torso value: candidates whose goals
         ;; are out of the arm's reach are passed over without setting the robot's state
         (let ((shoulders (shoulder-positions robot ee-goals torso torsos)))
-         (dolist (offset (base-candidates move-base))
-          (let ((shift (base-offset-shift base0 (first offset) (second offset)))
-                (placed nil)
+         (loop
+          with candidates = (base-candidates move-base)
+          for offset in candidates
+          for shift in (base-offset-shifts base0 candidates)
+          do
+          (let ((placed nil)
                 (base-blocked :unknown))
            (loop
             for torso-value in torsos

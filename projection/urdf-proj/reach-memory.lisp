@@ -59,11 +59,13 @@ goals in full only when the hashes agree."
     (declare (type fixnum h))
     (dolist (g goals h)
       (let* ((v (cdr g)) (sign (if (minusp (aref v 6)) -1d0 1d0)))
+        (declare (type pose-7 v) (type double-float sign))
         (setf h (logand most-positive-fixnum (+ (* h 31) (sxhash (car g)))))
         (dotimes (i 7)
           (let ((x (if (< i 3) (aref v i) (* sign (aref v i)))))
+            (declare (type double-float x))
             (setf h (logand most-positive-fixnum
-                            (+ (* h 31) (logand #xffffffff (round x 1d-4)))))))))))
+                            (+ (* h 31) (logand #xffffffff (round (/ x 1d-4))))))))))))
 
 (defun same-goals-p (a b)
   "True when the REACH-GOALS-KEYs A and B name the same arms at the same poses."
