@@ -125,22 +125,32 @@ joints without limits keep it."
         ((and (consp entry) (atom (cdr entry))) entry)
         (t (btr-fail "joint state ~s of ~s, expected (name value)" entry (name robot)))))
 
+(defun check-joint-value (robot name value)
+  "VALUE when it is a finite real fit for a joint; else a BTR-ERROR naming ROBOT's joint NAME."
+  (unless (and (finite-real-p value) (< (abs value) 1d6))
+    (btr-fail "joint ~s of ~s: value ~s, expected a finite real" name (name robot) value))
+  value)
+
+(defun clamped-joint-value (robot model index name value)
+  "The checked real VALUE of ROBOT's joint number INDEX (called NAME; MODEL its kinematic model)
+as a double float, clamped into the joint's limits when it lies beyond them."
+  (let ((value (to-double value)))
+    (declare (type double-float value) (type fixnum index))
+    (if (and (= 1 (sbit (km-limited model) index))
+             (or (< value (aref (km-lower model) index)) (> value (aref (km-upper model) index))))
+        (clamp-to-joint-limits robot name value index)
+        value)))
+
 (defun set-indexed-joint (robot index value)
   "Set ROBOT's joint number INDEX to VALUE (a real), as SET-ROBOT-STATE-FROM-JOINTS sets one
 joint (clamped into its limits, links and attached objects moved), for a caller that knows the
 joint's index and sets it many times."
-  (let ((model (%model robot)))
-    (declare (type fixnum index))
-    (unless (and (finite-real-p value) (< (abs value) 1d6))
-      (btr-fail "joint ~s of ~s: value ~s, expected a finite real"
-                (svref (km-joint-names model) index) (name robot) value))
-    (setf value (to-double value))
-    (when (and (= 1 (sbit (km-limited model) index))
-               (or (< value (aref (km-lower model) index)) (> value (aref (km-upper model) index))))
-      (setf value (clamp-to-joint-limits robot (svref (km-joint-names model) index) value index)))
-    (let ((indices (make-array 1 :element-type '(signed-byte 32) :initial-element index))
-          (values (make-array 1 :element-type 'double-float :initial-element value)))
-      (native:set-robot-joints (whandle robot) (object-handle robot) indices values))
+  (let* ((model (%model robot))
+         (name (svref (km-joint-names model) index))
+         (value (clamped-joint-value robot model index name (check-joint-value robot name value)))
+         (indices (make-array 1 :element-type '(signed-byte 32) :initial-element index))
+         (values (make-array 1 :element-type 'double-float :initial-element value)))
+    (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
     robot))
 
 (defun set-robot-state-from-joints (joint-states robot)
@@ -155,32 +165,23 @@ table name → value. All joints are set at once, then links and attached object
          (indices (make-array count :element-type '(signed-byte 32)))
          (values (make-array count :element-type 'double-float))
          (names (km-joint-names model))
-         (limited (km-limited model))
-         (lower (km-lower model))
-         (upper (km-upper model))
          (next 0))
     (declare (type simple-vector names) (type fixnum next count))
     (loop for entry in pairs for i of-type fixnum from 0
           do (destructuring-bind (n . v) (if (hash-table-p joint-states) entry (joint-state-pair entry robot))
                (unless (stringp n) (btr-fail "joint name ~s of ~s, expected a string" n (name robot)))
-               (unless (and (finite-real-p v) (< (abs v) 1d6))
-                 (btr-fail "joint ~s of ~s: value ~s, expected a finite real" n (name robot) v))
+               (check-joint-value robot n v)
                ;; the names of a whole state (JOINT-STATES) are the model's own strings, in its
                ;; order: found a few places after the last one without a table
-               (let* ((index (or (loop for k of-type fixnum from next
-                                         below (min (length names) (+ next 8))
-                                       when (eq n (svref names k)) return k)
-                                 (model-joint-index model n)
-                                 (btr-fail "joint ~s is not a joint of ~s" n (name robot))))
-                      (value (to-double v)))
-                 (declare (type fixnum index) (type double-float value))
+               (let ((index (or (loop for k of-type fixnum from next
+                                        below (min (length names) (+ next 8))
+                                      when (eq n (svref names k)) return k)
+                                (model-joint-index model n)
+                                (btr-fail "joint ~s is not a joint of ~s" n (name robot)))))
+                 (declare (type fixnum index))
                  (setf next (1+ index))
                  (setf (aref indices i) index
-                       (aref values i) (if (and (= 1 (sbit limited index))
-                                                (or (< value (aref lower index))
-                                                    (> value (aref upper index))))
-                                           (clamp-to-joint-limits robot n value index)
-                                           value)))))
+                       (aref values i) (clamped-joint-value robot model index n v)))))
     (native:set-robot-joints (whandle robot) (object-handle robot) indices values)
     robot))
 

@@ -309,19 +309,23 @@ from BASE to OFFSET-BASE-POSE BASE DX DY."
 
 (defvar *base-offset-shifts* nil
   "(orientation candidates . shifts): the last answer of BASE-OFFSET-SHIFTS, for the base
-orientation (its four numbers) and the list of base candidates it was made for.")
+orientation (a quaternion) and the list of base candidates it was made for.")
+
+(defun same-rotation-numbers-p (a b)
+  "True when the quaternions A and B have the same four numbers."
+  (and (= (cl-transforms:x a) (cl-transforms:x b)) (= (cl-transforms:y a) (cl-transforms:y b))
+       (= (cl-transforms:z a) (cl-transforms:z b)) (= (cl-transforms:w a) (cl-transforms:w b))))
 
 (defun base-offset-shifts (base candidates)
   "BASE-OFFSET-SHIFT of BASE for each (dx dy) of CANDIDATES (a list BASE-CANDIDATES gave), in
 order: made again only for another base orientation or list (the searches of a pre-check all
 start from the base pose it stands at). Not to be modified."
-  (let* ((q (cl-transforms:orientation base))
-         (key (list (cl-transforms:x q) (cl-transforms:y q) (cl-transforms:z q) (cl-transforms:w q)))
-         (last *base-offset-shifts*))
-    (if (and last (eq (second last) candidates) (equal (first last) key))
+  (let ((q (cl-transforms:orientation base))
+        (last *base-offset-shifts*))
+    (if (and last (eq (second last) candidates) (same-rotation-numbers-p (first last) q))
         (cddr last)
         (let ((shifts (mapcar (lambda (o) (base-offset-shift base (first o) (second o))) candidates)))
-          (setf *base-offset-shifts* (list* key candidates shifts))
+          (setf *base-offset-shifts* (list* q candidates shifts))
           shifts))))
 
 (defun goals-within-reach-p (shoulders shift ee-goals)
