@@ -289,3 +289,52 @@ functions called at each centre, in the order they are applied, a cell that is 0
           (unless (eql (costmap:kitchen-restricted-area px py) (area px py)) (push point mismatches))))
       (is (null mismatches) "points where the area differs: ~s" mismatches)
       (is (and (member 0d0 values) (member 1d0 values) t)))))
+
+(test turned-link-top-grid-gives-the-function-values
+  ;; the top of a turned link: the grid evaluator fills the cells with the values a call at
+  ;; their centres gives, and the call takes any reals
+  (in-kitchen
+    (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
+           (name "kitchen_island_surface"))
+      (setf (btr:pose kitchen)
+            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                     (cl-transforms:axis-angle->quaternion
+                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (let* ((top (costmap::link-top-function kitchen name 0.05d0))
+             (costmap (costmap:make-location-costmap :width 6 :height 6 :resolution 0.05d0
+                                                     :origin-x -3 :origin-y -3))
+             (rows (costmap:costmap-rows costmap)) (cols (costmap:costmap-columns costmap))
+             (window (make-array (list rows cols) :element-type 'double-float
+                                                  :initial-element 1d0))
+             (evaluator (costmap::cost-function-grid-evaluator top))
+             (mismatches 0) (ones 0))
+        (is (functionp evaluator) "a turned link's top has a grid evaluator")
+        (funcall evaluator costmap window 0 rows 0 cols)
+        (dotimes (r rows)
+          (dotimes (c cols)
+            (let ((v (funcall top (costmap::cell-center-x costmap c) (costmap::cell-center-y costmap r))))
+              (when (= v 1d0) (incf ones))
+              (unless (eql v (aref window r c)) (incf mismatches)))))
+        (is (zerop mismatches))
+        (is (< 100 ones (* rows cols)) "the top covers some cells, not all")
+        (let ((centre (cl-transforms:origin (btr:link-pose kitchen name))))
+          (is (eql 1d0 (funcall top (rational (cl-transforms:x centre))
+                                (float (cl-transforms:y centre) 1f0)))))))))
+
+(test potential-field-takes-any-real-threshold
+  ;; LEFT-OF along the dining table's front edge: the value is the cosine of the angle off
+  ;; the direction, 0 below the threshold (a rational or a single-float as a double)
+  (in-kitchen
+    (let* ((support (costmap::supporting-body (btr:object btr:*current-bullet-world* 'mug-1)))
+           (reference (cl-transforms:make-3d-vector -1.5d0 -1d0 0.8d0))
+           (f (costmap::potential-field-function :left-of :front reference support 1/2))
+           (g (costmap::potential-field-function :left-of :front reference support 0.5f0)))
+      (is (not (null support)) "the mug stands on something")
+      (let ((values (loop for a from 0 below 360 by 15
+                          collect (let ((x (+ -1.5d0 (* 0.3d0 (cos (* a (/ pi 180))))))
+                                        (y (+ -1d0 (* 0.3d0 (sin (* a (/ pi 180)))))))
+                                    (list (funcall f x y) (funcall g x y)
+                                          (funcall f (rational x) (rational y)))))))
+        (is (every (lambda (v) (and (eql (first v) (second v)) (eql (first v) (third v)))) values))
+        (is (every (lambda (v) (or (zerop (first v)) (<= 0.5d0 (first v) 1d0))) values))
+        (is (< 0 (count-if (lambda (v) (zerop (first v))) values) (length values)))))))

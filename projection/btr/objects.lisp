@@ -85,10 +85,16 @@ or (x y z) (identity orientation)."
 
 (defun vector->pose (v &optional (offset 0))
   "The CL-TRANSFORMS:POSE stored in V at OFFSET as x y z qx qy qz qw."
-  (cl-transforms:make-pose
-   (cl-transforms:make-3d-vector (aref v offset) (aref v (+ offset 1)) (aref v (+ offset 2)))
-   (cl-transforms:make-quaternion (aref v (+ offset 3)) (aref v (+ offset 4))
-                                  (aref v (+ offset 5)) (aref v (+ offset 6)))))
+  (macrolet ((pose-of (v)
+               `(cl-transforms:make-pose
+                 (cl-transforms:make-3d-vector (aref ,v offset) (aref ,v (+ offset 1))
+                                               (aref ,v (+ offset 2)))
+                 (cl-transforms:make-quaternion (aref ,v (+ offset 3)) (aref ,v (+ offset 4))
+                                                (aref ,v (+ offset 5)) (aref ,v (+ offset 6))))))
+    ;; the native layer's vectors of doubles read without a generic AREF
+    (if (and (typep v '(simple-array double-float (*))) (typep offset '(integer 0 #.(- array-dimension-limit 7))))
+        (pose-of (the (simple-array double-float (*)) v))
+        (pose-of v))))
 
 ;;; ---- collision filters ---------------------------------------------------------------------
 

@@ -69,6 +69,7 @@ computes it for that centre: the cost function's values without a call per cell.
 or pose), C the positive definite 2x2 COVARIANCE.  It is zero more than 4 standard deviations
 from MEAN along x or y."
   (multiple-value-bind (mx my) (point-xy mean "MAKE-GAUSS-COST-FUNCTION mean")
+    (declare (type double-float mx my))
     (multiple-value-bind (sxx sxy syy) (covariance-entries covariance)
       (let ((det (- (* sxx syy) (* sxy sxy))))
         (unless (and (> sxx 0) (> det 0))

@@ -257,13 +257,21 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
   (setf (slot-value c 'columns) (max 1 (round (to-double (width c)) (resolution c)))
         (slot-value c 'rows) (max 1 (round (to-double (height c)) (resolution c)))))
 
+(declaim (inline cell-center))
+(defun cell-center (origin resolution index)
+  "ORIGIN + (INDEX + 0.5) RESOLUTION: in doubles when ORIGIN and RESOLUTION are (as the
+costmap keeps them), else as the reals they are."
+  (if (and (typep origin 'double-float) (typep resolution 'double-float) (typep index 'fixnum))
+      (+ origin (* (+ index 0.5d0) resolution))
+      (+ origin (* (+ index 0.5d0) resolution))))
+
 (defun cell-center-x (costmap column)
   "The map x of the centre of the cells in COLUMN."
-  (+ (origin-x costmap) (* (+ column 0.5d0) (resolution costmap))))
+  (cell-center (origin-x costmap) (resolution costmap) column))
 
 (defun cell-center-y (costmap row)
   "The map y of the centre of the cells in ROW."
-  (+ (origin-y costmap) (* (+ row 0.5d0) (resolution costmap))))
+  (cell-center (origin-y costmap) (resolution costmap) row))
 
 (defun invalidate-costmap (costmap)
   (setf (%window costmap) nil (%matrix costmap) nil (%total costmap) nil
