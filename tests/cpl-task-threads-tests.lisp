@@ -102,3 +102,31 @@ threads stopped before and after."
                  (setf done t))))
     (is (eq t reused) "the PAR child did not reuse the thread")
     (is (eq t done) "the next task was unwound by a request for the one before"))))
+
+(defun within-seconds (seconds thunk)
+  "THUNK's value when it returns within SECONDS (run in a thread of its own), else :TIMEOUT: a
+lost wake-up shows as a timeout, not as a hung test run."
+  (let ((thread (sb-thread:make-thread thunk :name "hand-over test")))
+    (multiple-value-bind (value status) (sb-thread:join-thread thread :timeout seconds :default :timeout)
+      (declare (ignore status))
+      (when (eq value :timeout) (ignore-errors (sb-thread:terminate-thread thread)))
+      value)))
+
+(test many-hand-overs-are-never-lost
+  ;; the wake-ups come after the locks are left (CPL::NOTIFY-AFTER-UNLOCK, the task threads'
+  ;; pool): a thousand PARs in turn, each child ending at once or after a short wait, with and
+  ;; without ordered starts, all end and each child ran once
+  (with-idle-limit (4)
+    (dolist (ordered '(t nil))
+      (let ((result
+              (within-seconds
+               60 (lambda ()
+                    (let ((cpl::*ordered-concurrency* ordered) (runs (list 0)))
+                      (cpl:top-level
+                        (dotimes (i 1000)
+                          (cpl:par (sb-ext:atomic-incf (car runs))
+                                   (progn (when (zerop (mod i 7)) (sleep 0.0001))
+                                          (sb-ext:atomic-incf (car runs)))
+                                   (sb-ext:atomic-incf (car runs)))))
+                      (car runs))))))
+        (is (eql 3000 result) "ordered starts ~a: ~s" ordered result)))))

@@ -18,18 +18,21 @@ most recent first."
   (changes 0 :type fixnum)   ; how often RUNNING changed
   (starters '()))
 
-(defun %activity-change (activity delta)
-  "ACTIVITY-CHANGE with ACTIVITY's lock held."
+(defun %activity-change (activity delta &key (tell t))
+  "ACTIVITY-CHANGE with ACTIVITY's lock held. True when no task runs any more; then, with
+TELL, the starters are told at once (else the caller tells them once it has left the lock)."
   (setf (activity-changes activity) (logand (1+ (activity-changes activity)) most-positive-fixnum))
   (when (zerop (incf (activity-running activity) delta))
-    (sb-thread:condition-broadcast (activity-quiet activity))))
+    (when tell (sb-thread:condition-broadcast (activity-quiet activity)))
+    t))
 
 (defun activity-change (activity delta)
   "Count DELTA more running tasks in ACTIVITY (NIL: none is counted); tell the starters when
 none runs."
   (when activity
-    (sb-thread:with-mutex ((activity-lock activity))
-      (%activity-change activity delta))))
+    (when (sb-thread:with-mutex ((activity-lock activity))
+            (%activity-change activity delta :tell nil))
+      (notify-after-unlock (activity-quiet activity)))))
 
 (defun task-depth (task)
   "How many tasks TASK lies below its plan's top-level task."

@@ -67,8 +67,10 @@ offers the thread for the next job. Returns the thread."
            (let ((thread (task-thread-slot-thread slot)))
              (setf (sb-thread:thread-name thread) name)
              (sb-thread:with-mutex ((task-thread-slot-lock slot))
-               (setf (task-thread-slot-job slot) job)
-               (sb-thread:condition-notify (task-thread-slot-ready slot)))
+               (setf (task-thread-slot-job slot) job))
+             ;; woken after the lock is free, the thread takes the job without waiting for the
+             ;; lock (a wake-up under the lock makes it wait for the lock, a second wake-up)
+             (sb-thread:condition-notify (task-thread-slot-ready slot))
              thread))
           (t
            (let ((slot (make-task-thread-slot)))

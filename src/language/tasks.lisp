@@ -121,6 +121,14 @@ it, above all calls into foreign code (which must not be unwound), and never
 a long or blocking wait."
   `(sb-sys:without-interrupts ,@body))
 
+(defun notify-after-unlock (queue)
+  "Wake every thread waiting on QUEUE, called right after leaving the lock they wait with,
+once what they wait for has been set under it. Each waiter checks its condition under the
+lock in a loop, and a wake-up between its check and its wait is not lost (SBCL's futex
+waitqueues). Woken under the lock, a waiter would find the lock taken and wait once more for
+it: a second wake-up of a second thread, which the plans' many short hand-overs pay for."
+  (sb-thread:condition-broadcast queue))
+
 (defun task-done-p (task)
   "True once TASK has ended: succeeded, failed or evaporated."
   (member (task-status task) '(:succeeded :failed :evaporated)))
@@ -133,8 +141,8 @@ a long or blocking wait."
             (task-failure task) failure
             (task-finish-order task) (incf (task-group-finished group)))
       ;; the parent, waiting for its children's decision, runs again before this one stops
-      (wake-waiting-task (task-parent task) group)
-      (sb-thread:condition-broadcast (task-group-condition group)))
+      (wake-waiting-task (task-parent task) group))
+    (notify-after-unlock (task-group-condition group))
     (activity-change (task-activity task) -1)
     (note-task-status task)))
 
@@ -239,8 +247,8 @@ the thread for another task)."
   (funcall offer-thread)
   (let ((group (task-group task)))
     (bt:with-lock-held ((task-group-lock group))
-      (setf (task-released task) t)
-      (sb-thread:condition-broadcast (task-group-condition group)))))
+      (setf (task-released task) t))
+    (notify-after-unlock (task-group-condition group))))
 
 (defun wait-for-release (task)
   "Wait until TASK's thread has left the task's code."
