@@ -130,3 +130,42 @@ lost wake-up shows as a timeout, not as a hung test run."
                                    (sb-ext:atomic-incf (car runs)))))
                       (car runs))))))
         (is (eql 3000 result) "ordered starts ~a: ~s" ordered result)))))
+
+(defun mask-cpus (mask)
+  "The CPUs of a CPU mask (CPL::THREAD-CPU-MASK)."
+  (loop for cpu below (* 8 (length mask)) when (logbitp (mod cpu 8) (aref mask (floor cpu 8))) collect cpu))
+
+(defun thread-cpus () (mask-cpus (cpl::thread-cpu-mask)))
+
+(defun par-cpus (&key (ordered t))
+  "The CPUs the top-level task and the two children of a PAR may run on, with ordered starts as
+in projection (ORDERED) or without: (top-level first-child second-child plan-cpu)."
+  (let ((cpl::*ordered-concurrency* ordered) (top nil) (a nil) (b nil) (plan nil))
+    (cpl:top-level
+      (setf top (thread-cpus) plan cpl:*plan-cpu*)
+      (cpl:par (setf a (thread-cpus)) (setf b (thread-cpus))))
+    (list top a b plan)))
+
+(test a-projected-plan-keeps-its-threads-on-one-cpu
+  (let ((before (thread-cpus)))
+    (if (< (length before) 2)
+        (pass "this thread may run on one CPU only: nothing to keep")
+        (with-idle-limit (4)
+          (destructuring-bind (top a b plan) (par-cpus)
+            (is (integerp plan))
+            (is (equal (list plan) top) "the top-level task runs on the plan's CPU")
+            (is (equal top a) "a child on another CPU: ~s ~s" top a)
+            (is (equal top b)))
+          (is (equal before (thread-cpus)) "the caller's CPUs come back after the plan")
+          ;; the same threads run a plan without ordered starts on any CPU again
+          (destructuring-bind (top a b plan) (par-cpus :ordered nil)
+            (is (null plan))
+            (is (equal before top))
+            (is (equal before a) "a task thread kept its plan's CPU: ~s" a)
+            (is (equal before b)))
+          (let ((cpl:*keep-plans-on-one-cpu* nil))
+            (destructuring-bind (top a b plan) (par-cpus)
+              (is (null plan))
+              (is (equal before top))
+              (is (equal before a))
+              (is (equal before b))))))))

@@ -23,6 +23,7 @@
    #:not-inside-plan-error #:nested-top-level-error
    #:task-exit-error #:task-exit-task-name
    #:*max-idle-task-threads* #:*idle-task-thread-name* #:stop-idle-task-threads
+   #:*keep-plans-on-one-cpu* #:*plan-cpu*
    ;; the task interface
    #:status #:result #:task-dead #:task-alive #:task-running-p #:task-dead-p #:task-failed-p
    #:task-done-p #:join-task #:toplevel-task #:tagged-task #:with-tags #:partial-order

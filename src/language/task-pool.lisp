@@ -18,7 +18,76 @@ ends, as a fresh thread per task).")
   (lock (sb-thread:make-mutex :name "plan thread"))
   (ready (sb-thread:make-waitqueue :name "plan thread"))
   (job nil)
+  (cpu nil)       ; the CPU the next job's plan keeps to (*PLAN-CPU*), or NIL
+  (pinned nil)    ; the CPU the thread is kept on now, or NIL (any it may use)
+  (free-mask nil) ; its CPU mask before it was first kept on one
   (thread nil))
+
+;;; ---- the CPU of a plan ----------------------------------------------------------------------
+;;; A projected plan runs one task at a time (*ORDERED-CONCURRENCY*): its threads hand the work
+;;; to each other. On one CPU a hand-over is a switch of threads; across CPUs it first wakes the
+;;; other CPU, which costs more than the work of a short motion. So a plan in projection keeps
+;;; its threads on the CPU its top-level task started on (*PLAN-CPU*), for the run.
+
+(defparameter *keep-plans-on-one-cpu* t
+  "When true, a plan run under *ORDERED-CONCURRENCY* (projection) keeps its threads, the
+top-level task's among them, on the CPU the top-level task starts on, until it ends (the
+caller's thread gets its CPUs back then). NIL: the threads run wherever the system puts them.")
+
+(defvar *plan-cpu* nil
+  "The CPU the running plan's threads keep to, or NIL. Task threads inherit it.")
+
+(defvar *plan-free-mask* nil
+  "While *PLAN-CPU* is set: the CPU mask the plan's top-level thread had before, which a task
+thread started by the plan (and so kept on the plan's CPU from its start) gets back after it.")
+
+(defconstant +cpu-mask-bytes+ 128 "The size of Linux's cpu_set_t (1024 CPUs).")
+
+(defun thread-cpu-mask ()
+  "The CPU mask of the calling thread (a byte vector), or NIL when the system does not tell."
+  (let ((mask (make-array +cpu-mask-bytes+ :element-type '(unsigned-byte 8) :initial-element 0)))
+    (sb-sys:with-pinned-objects (mask)
+      (and (zerop (sb-alien:alien-funcall
+                   (sb-alien:extern-alien "sched_getaffinity"
+                                          (function sb-alien:int sb-alien:int sb-alien:unsigned-long
+                                                    sb-alien:system-area-pointer))
+                   0 +cpu-mask-bytes+ (sb-sys:vector-sap mask)))
+           mask))))
+
+(defun set-thread-cpu-mask (mask)
+  "Let the calling thread run on the CPUs of MASK (a byte vector of THREAD-CPU-MASK). True when
+done."
+  (sb-sys:with-pinned-objects (mask)
+    (zerop (sb-alien:alien-funcall
+            (sb-alien:extern-alien "sched_setaffinity"
+                                   (function sb-alien:int sb-alien:int sb-alien:unsigned-long
+                                             sb-alien:system-area-pointer))
+            0 +cpu-mask-bytes+ (sb-sys:vector-sap mask)))))
+
+(defun cpu-mask (cpu)
+  "The CPU mask of CPU alone."
+  (let ((mask (make-array +cpu-mask-bytes+ :element-type '(unsigned-byte 8) :initial-element 0)))
+    (setf (aref mask (floor cpu 8)) (ash 1 (mod cpu 8)))
+    mask))
+
+(defun current-cpu ()
+  "The CPU the calling thread runs on, or NIL when the system does not tell."
+  (let ((cpu (sb-alien:alien-funcall (sb-alien:extern-alien "sched_getcpu" (function sb-alien:int)))))
+    (and (<= 0 cpu (1- (* 8 +cpu-mask-bytes+))) cpu)))
+
+(defun keep-slot-on-cpu (slot)
+  "In SLOT's thread, before its job: keep it on the CPU of the job's plan (SLOT's CPU), or give
+it back the CPUs it had when the job has none."
+  (let ((cpu (task-thread-slot-cpu slot)))
+    (unless (eql cpu (task-thread-slot-pinned slot))
+      (cond (cpu
+             (unless (task-thread-slot-free-mask slot)
+               (setf (task-thread-slot-free-mask slot) (thread-cpu-mask)))
+             (setf (task-thread-slot-pinned slot)
+                   (and (set-thread-cpu-mask (cpu-mask cpu)) cpu)))
+            ((task-thread-slot-free-mask slot)
+             (set-thread-cpu-mask (task-thread-slot-free-mask slot))
+             (setf (task-thread-slot-pinned slot) nil))))))
 
 (defvar *idle-task-threads* '() "Slots of the task threads waiting for a task.")
 (defvar *idle-task-threads-lock* (sb-thread:make-mutex :name "plan threads"))
@@ -50,6 +119,7 @@ one, wait for and run that."
   (let ((job first-job))
     (loop
       (when (eq job :exit) (return))
+      (keep-slot-on-cpu slot)
       (let ((offered nil))
         (funcall (the function job) (lambda () (setf offered (offer-task-thread slot))))
         (setf job nil)
@@ -67,13 +137,18 @@ offers the thread for the next job. Returns the thread."
            (let ((thread (task-thread-slot-thread slot)))
              (setf (sb-thread:thread-name thread) name)
              (sb-thread:with-mutex ((task-thread-slot-lock slot))
-               (setf (task-thread-slot-job slot) job))
+               (setf (task-thread-slot-job slot) job
+                     (task-thread-slot-cpu slot) *plan-cpu*))
              ;; woken after the lock is free, the thread takes the job without waiting for the
              ;; lock (a wake-up under the lock makes it wait for the lock, a second wake-up)
              (sb-thread:condition-notify (task-thread-slot-ready slot))
              thread))
           (t
            (let ((slot (make-task-thread-slot)))
+             ;; a new thread starts with the CPUs of the thread that starts it: the plan's
+             (setf (task-thread-slot-cpu slot) *plan-cpu*
+                   (task-thread-slot-pinned slot) *plan-cpu*
+                   (task-thread-slot-free-mask slot) (and *plan-cpu* *plan-free-mask*))
              (setf (task-thread-slot-thread slot)
                    (sb-thread:make-thread (lambda () (task-thread-loop slot job)) :name name)))))))
 

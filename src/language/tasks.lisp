@@ -11,7 +11,7 @@
     *debug-io* *terminal-io* *package* *readtable*
     *log-stream* *log-tags* *log-level* *log-tally* *sleep-function*
     *debug-on-lisp-errors* *break-on-plan-failures* *debugger-hook* sb-ext:*invoke-debugger-hook*
-    *ordered-concurrency*)
+    *ordered-concurrency* *plan-cpu* *plan-free-mask*)
   "Special variables whose values a child task thread starts with, taken from
 the thread that starts it. Other layers add their own with PUSHNEW, e.g. the
 projection environment's clock or the current designators.")
@@ -325,6 +325,18 @@ and all threads joined before this returns. Returns the decision."
   "Signal CONDITION, a failure that came from a child task, in this task."
   (fail condition))
 
+(defun call-on-plan-cpu (thunk)
+  "Call THUNK, the top-level task of a plan in this thread: with *KEEP-PLANS-ON-ONE-CPU* and
+*ORDERED-CONCURRENCY*, on the CPU it runs on now (*PLAN-CPU*), the thread's CPUs restored
+afterwards. As is when this thread may run on one CPU only, or the system does not tell."
+  (let* ((mask (and *keep-plans-on-one-cpu* *ordered-concurrency* (null *plan-cpu*)
+                    (thread-cpu-mask)))
+         (cpu (and mask (> (loop for byte across mask sum (logcount byte)) 1) (current-cpu))))
+    (if (and cpu (set-thread-cpu-mask (cpu-mask cpu)))
+        (unwind-protect (let ((*plan-cpu* cpu) (*plan-free-mask* mask)) (funcall thunk))
+          (set-thread-cpu-mask mask))
+        (funcall thunk))))
+
 (defun run-task-here (name group thunk node)
   "Run THUNK as the task NAME of GROUP in this thread (which runs no task), as SPAWN-TASK's
 thread would: the task's bindings, its outcome in GROUP. Returns the task."
@@ -337,15 +349,17 @@ thread would: the task's bindings, its outcome in GROUP. Returns the task."
     (let ((*current-task* task)
           (*task-tree-node* nil)
           (*task-in-caller-thread* task))
-      (unwind-protect
-           ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
-           ;; debugger (ABORT) is then no foreign exit
-           (handler-bind ((sb-sys:interactive-interrupt
-                            (lambda (c) (declare (ignore c)) (setf (task-evaporating task) t))))
-             (execute-task task thunk node))
-        (unless (task-done-p task)
-          ;; unwound from outside the plan: nothing is left running
-          (setf (task-status task) :evaporated))))
+      (call-on-plan-cpu
+       (lambda ()
+         (unwind-protect
+              ;; an interrupt from the keyboard (C-c) evaporates the task: leaving it from the
+              ;; debugger (ABORT) is then no foreign exit
+              (handler-bind ((sb-sys:interactive-interrupt
+                               (lambda (c) (declare (ignore c)) (setf (task-evaporating task) t))))
+                (execute-task task thunk node))
+           (unless (task-done-p task)
+             ;; unwound from outside the plan: nothing is left running
+             (setf (task-status task) :evaporated))))))
     task))
 
 (defun call-as-top-level (name thunk)
