@@ -338,3 +338,44 @@ code, standard output (trimmed) and error output."
       (let ((state (ignore-errors (read-from-string out))))
         (is (equal '(0 0 t 2 1) state) "run counter, recorded runs, recorder, kept reach maps, worlds: ~s"
             state)))))
+
+;;; ---- the CPU of each worker (tools/worker-cpu.lisp) ------------------------------------------
+
+(defparameter *worker-cpu-form*
+  "(flet ((in-thread (pin)
+           ;; in a thread of its own, whose CPUs are its own
+           (sb-thread:join-thread
+            (sb-thread:make-thread
+             (lambda ()
+               (let ((cram-plans-demo::*pin-workers* pin))
+                 (list (cram-plans-demo::pin-to-slot-cpu 1)
+                       (cram-plans-demo::mask-cpus (cpl::thread-cpu-mask)))))))))
+    (prin1 (list (mapcar (lambda (slot) (cram-plans-demo::slot-cpu slot '(0 1))) '(0 1 2 3))
+                 (mapcar (lambda (slot) (cram-plans-demo::slot-cpu slot '(2 5 7))) '(0 1 2 3))
+                 (cram-plans-demo::slot-cpu 0 '())
+                 (cram-plans-demo::mask-cpus (cpl::cpu-mask 3))
+                 (cram-plans-demo::mask-cpus (cpl::thread-cpu-mask))
+                 (in-thread t)
+                 (in-thread nil)))
+    (terpri))"
+  "A program for a process of the saved core: the CPUs workers take, printed as a list.")
+
+(test workers-take-the-cpus-in-turn
+  (multiple-value-bind (code core) (core-script)
+    (is (eql 0 code))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (list "sbcl" "--core" core "--noinform" "--non-interactive" "--no-userinit"
+                                "--no-sysinit" "--eval" *worker-cpu-form*)
+                          :output :string :error-output :string :ignore-error-status t)
+      (is (eql 0 code) "~a" err)
+      (destructuring-bind (&optional in-turn three none mask cpus pinned free)
+          (ignore-errors (read-from-string out))
+        (is (equal '(0 1 0 1) in-turn))
+        (is (equal '(2 5 7 2) three))
+        (is (null none))
+        (is (equal '(3) mask))
+        (if (< (length cpus) 2)
+            (is (equal (list nil cpus) pinned) "one CPU: nothing to choose")
+            ;; a worker of slot 1 keeps to the second CPU it may use; with pinning off, to all
+            (progn (is (equal (list (second cpus) (list (second cpus))) pinned) "~s" out)
+                   (is (equal (list nil cpus) free))))))))

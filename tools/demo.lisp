@@ -170,4 +170,5 @@ status 0 when the bottle ends within *TOLERANCE* of the destination, else 1."
 (with-compilation-unit ()
   (load (merge-pathnames "runner.lisp" *tools-directory*))
   (load (merge-pathnames "campaign-pool.lisp" *tools-directory*))
+  (load (merge-pathnames "worker-cpu.lisp" *tools-directory*))
   (load (merge-pathnames "household-run.lisp" *tools-directory*)))

@@ -249,7 +249,9 @@ worker that reaches it. A line on standard output announces it."
 \(with POOL, a pool file of WRITE-POOL) the runs it claims from the pool one at a time,
 appending one JSON line per run to RESULTS-FILE (a run that signals outside the plan is
 recorded as a failure), and every MEMORY-EVERY runs a memory sample to MEMORY-FILE. Exits 0.
-Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECORD-RUNS*)."
+Nobody replays a worker's runs: the viewer's recorder is off (CRAM-VIEWER:*RECORD-RUNS*).
+The process keeps to the CPU of its SLOT (PIN-TO-SLOT-CPU)."
+  (pin-to-slot-cpu slot)
   (setf cram-viewer:*record-runs* nil
         *campaign-demo* demo
         (sb-ext:bytes-consed-between-gcs) *worker-nursery-bytes*)
