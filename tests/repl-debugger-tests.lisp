@@ -111,6 +111,16 @@
   (do-external-symbols (symbol :cpl-impl)
     (is (eq :external (nth-value 1 (find-symbol (symbol-name symbol) :cpl))))))
 
+(test cpl-impl-loads-again-without-warnings
+  ;; as loading the file just compiled does: the package is made once, its exports kept
+  (let ((warnings '())
+        (count (let ((n 0)) (do-external-symbols (s :cpl-impl) (declare (ignore s)) (incf n)) n)))
+    (handler-bind ((warning (lambda (w) (push w warnings) (muffle-warning w))))
+      (load (asdf:system-relative-pathname "cram-plans" "src/language/implementation-package.lisp")))
+    (is (null warnings) "~{~a~^; ~}" warnings)
+    (is (eq 'cpl-impl:fail 'cpl:fail))
+    (is (= count (let ((n 0)) (do-external-symbols (s :cpl-impl) (declare (ignore s)) (incf n)) n)))))
+
 (test log-lines-go-to-the-callers-output
   (is (null cpl:*log-stream*))
   (flet ((run-plan ()

@@ -36,11 +36,14 @@
     "The names CRAM's CRAM-LANGUAGE-IMPLEMENTATION package exports. Those that CPL exports too
 are exported by CPL-IMPL as CPL's symbols.")
 
-  (defpackage :cram-language-implementation
-    (:nicknames :cpl-impl)
-    (:use)
-    (:documentation "CRAM's implementation package of the plan language: the symbols of CPL
-\(CRAM-LANGUAGE) under the names CRAM's CPL-IMPL exports, e.g. CPL-IMPL:*DEBUG-ON-LISP-ERRORS*."))
+  ;; made once: evaluated again (loading what was just compiled), DEFPACKAGE would find the
+  ;; exports below missing from its own list and warn about them
+  (unless (find-package :cram-language-implementation)
+    (defpackage :cram-language-implementation
+      (:nicknames :cpl-impl)
+      (:use)
+      (:documentation "CRAM's implementation package of the plan language: the symbols of CPL
+\(CRAM-LANGUAGE) under the names CRAM's CPL-IMPL exports, e.g. CPL-IMPL:*DEBUG-ON-LISP-ERRORS*.")))
 
   (let ((implementation (find-package :cram-language-implementation)))
     (dolist (name cram-language::+implementation-names+)
