@@ -296,10 +296,7 @@ functions called at each centre, in the order they are applied, a cell that is 0
   (in-kitchen
     (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
            (name "kitchen_island_surface"))
-      (setf (btr:pose kitchen)
-            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
-                                     (cl-transforms:axis-angle->quaternion
-                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (turn-about-z kitchen 0.4d0)
       (let* ((top (costmap::link-top-function kitchen name 0.05d0))
              (costmap (costmap:make-location-costmap :width 6 :height 6 :resolution 0.05d0
                                                      :origin-x -3 :origin-y -3))

@@ -48,6 +48,13 @@
        (btr:with-copied-world ()
          ,@body))))
 
+(defun turn-about-z (object yaw)
+  "Put OBJECT at the origin, turned by YAW radians about the vertical."
+  (setf (btr:pose object)
+        (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
+                                 (cl-transforms:axis-angle->quaternion
+                                  (cl-transforms:make-3d-vector 0 0 1) yaw))))
+
 (defun mug-designator ()
   (desig:an object (type mug) (name mug-1)))
 
@@ -132,10 +139,7 @@
   (in-kitchen
     (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
            (name "kitchen_island_surface"))
-      (setf (btr:pose kitchen)
-            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
-                                     (cl-transforms:axis-angle->quaternion
-                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (turn-about-z kitchen 0.4d0)
       (let* ((index (position name (btr:link-names kitchen) :test #'string=))
              (grid (costmap:environment-occupancy-grid))
              (corners (costmap::link-footprint kitchen index name)))
@@ -160,10 +164,7 @@
         (is (= 1 (funcall straight (+ (cl-transforms:x lo) 0.06) (+ (cl-transforms:y lo) 0.06)))
             "unturned: the box in the map, shrunk by the margin")
         (is (= 0 (funcall straight (+ (cl-transforms:x lo) 0.04) (+ (cl-transforms:y lo) 0.06)))))
-      (setf (btr:pose kitchen)
-            (cl-transforms:make-pose (cl-transforms:make-3d-vector 0 0 0)
-                                     (cl-transforms:axis-angle->quaternion
-                                      (cl-transforms:make-3d-vector 0 0 1) 0.4d0)))
+      (turn-about-z kitchen 0.4d0)
       (let ((top (costmap::link-top-function kitchen name 0.05d0))
             (centre (cl-transforms:origin (btr:link-pose kitchen name))))
         (multiple-value-bind (lo hi) (btr:aabb kitchen index)
