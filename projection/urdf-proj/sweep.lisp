@@ -218,7 +218,7 @@ looked up."
 steps."
   (when (eq (sweep-%path sweep) :unset)
     (setf (sweep-%path sweep)
-          (destructuring-bind (&optional points offset) (sweep-path-source sweep)
+          (destructuring-bind (&optional points (offset 0)) (sweep-path-source sweep)
             (and points
                  (loop for k from 0 to 16
                        for i = (+ offset (* 3 k))
