@@ -131,11 +131,7 @@ lost wake-up shows as a timeout, not as a hung test run."
                       (car runs))))))
         (is (eql 3000 result) "ordered starts ~a: ~s" ordered result)))))
 
-(defun mask-cpus (mask)
-  "The CPUs of a CPU mask (CPL::THREAD-CPU-MASK)."
-  (loop for cpu below (* 8 (length mask)) when (logbitp (mod cpu 8) (aref mask (floor cpu 8))) collect cpu))
-
-(defun thread-cpus () (mask-cpus (cpl::thread-cpu-mask)))
+(defun thread-cpus () (cpl::mask-cpus (cpl::thread-cpu-mask)))
 
 (defun par-cpus (&key (ordered t))
   "The CPUs the top-level task and the two children of a PAR may run on, with ordered starts as

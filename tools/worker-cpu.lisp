@@ -11,11 +11,6 @@
   "When true (unless CRAM_PLANS_PIN_WORKERS=0), each campaign worker runs on one CPU, the one of
 its slot among those it may use (PIN-TO-SLOT-CPU).")
 
-(defun mask-cpus (mask)
-  "The CPUs (ascending) of the CPU mask MASK (CPL::THREAD-CPU-MASK)."
-  (loop for cpu below (* 8 (length mask))
-        when (logbitp (mod cpu 8) (aref mask (floor cpu 8))) collect cpu))
-
 (defun slot-cpu (slot cpus)
   "The CPU of worker SLOT among CPUS: slots take them in turn."
   (and cpus (nth (mod slot (length cpus)) cpus)))
@@ -25,7 +20,7 @@ its slot among those it may use (PIN-TO-SLOT-CPU).")
 use) when it may use more than one. Returns the CPU, or NIL when it was left free. Called
 before any plan thread starts, so that they all run there."
   (let* ((mask (and *pin-workers* (cpl::thread-cpu-mask)))
-         (cpus (and mask (mask-cpus mask)))
+         (cpus (and mask (cpl::mask-cpus mask)))
          (cpu (and (rest cpus) (slot-cpu slot cpus))))
     (when (and cpu (cpl::set-thread-cpu-mask (cpl::cpu-mask cpu)))
       cpu)))

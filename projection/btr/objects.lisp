@@ -92,7 +92,7 @@ or (x y z) (identity orientation)."
                  (cl-transforms:make-quaternion (aref ,v (+ offset 3)) (aref ,v (+ offset 4))
                                                 (aref ,v (+ offset 5)) (aref ,v (+ offset 6))))))
     ;; the native layer's vectors of doubles read without a generic AREF
-    (if (and (typep v '(simple-array double-float (*))) (typep offset '(integer 0 #.(- array-dimension-limit 7))))
+    (if (and (typep v '(simple-array double-float (*))) (typep offset 'fixnum))
         (pose-of (the (simple-array double-float (*)) v))
         (pose-of v))))
 

@@ -64,6 +64,11 @@ done."
                                              sb-alien:system-area-pointer))
             0 +cpu-mask-bytes+ (sb-sys:vector-sap mask)))))
 
+(defun mask-cpus (mask)
+  "The CPUs (ascending) of the CPU mask MASK (a byte vector of THREAD-CPU-MASK)."
+  (loop for cpu below (* 8 (length mask))
+        when (logbitp (mod cpu 8) (aref mask (floor cpu 8))) collect cpu))
+
 (defun cpu-mask (cpu)
   "The CPU mask of CPU alone."
   (let ((mask (make-array +cpu-mask-bytes+ :element-type '(unsigned-byte 8) :initial-element 0)))

@@ -261,6 +261,7 @@ COSTMAP-SIZE, COSTMAP-RESOLUTION and COSTMAP-ORIGIN of the current robot.  (MAKE
 (defun cell-center (origin resolution index)
   "ORIGIN + (INDEX + 0.5) RESOLUTION: in doubles when ORIGIN and RESOLUTION are (as the
 costmap keeps them), else as the reals they are."
+  ;; the same sum twice: in the first branch the compiler knows the types and adds doubles
   (if (and (typep origin 'double-float) (typep resolution 'double-float) (typep index 'fixnum))
       (+ origin (* (+ index 0.5d0) resolution))
       (+ origin (* (+ index 0.5d0) resolution))))
