@@ -23,12 +23,13 @@ void set_query_all(World &w, bool on) { w.dispatcher->query_all = on; }
 
 World::World(const btVector3 &g) {
   // Small pools: Bullet takes the manifolds and collision algorithms beyond them from the heap,
-  // while a large pool is allocated and written through whenever a world is made (a world
-  // copy, e.g. a scratch world for a check, would pay for touching it: a copy of the kitchen
-  // world took 1.06 ms with pools of 256, 0.40 ms with pools of 8).
+  // while a pool is allocated and written through whenever a world is made. Pools of 256 (a
+  // third of a megabyte, mapped afresh each time) made a copy of the kitchen world cost
+  // 1.06 ms in fresh memory, pools of 64 0.64 ms; in the household demo a copy takes 0.45 ms
+  // with pools of 64, 0.57 ms with 256, and the runs are no slower.
   btDefaultCollisionConstructionInfo ci;
-  ci.m_defaultMaxPersistentManifoldPoolSize = 8;
-  ci.m_defaultMaxCollisionAlgorithmPoolSize = 8;
+  ci.m_defaultMaxPersistentManifoldPoolSize = 64;
+  ci.m_defaultMaxCollisionAlgorithmPoolSize = 64;
   config = new btDefaultCollisionConfiguration(ci);
   dispatcher = new Dispatcher(config, this);
   broadphase = new btDbvtBroadphase();
