@@ -176,7 +176,8 @@ btTransform frame_pose(const Object &o, int link) {
 void set_object_pose(World &w, Object &o, const btTransform &t) {
   if (o.kind == CN_BODY) {
     teleport_rb(w, o.rb, t);
-  } else {
+  } else if (!(o.base == t && o.link_pose.size() == o.model->links.size())) {
+    // (a third of the base poses a robot is given are the one it has: searches put it back)
     o.base = t;
     robot_fk(w, o);
   }
