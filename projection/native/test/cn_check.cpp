@@ -62,8 +62,14 @@ int main() {
     CHECK(cn_robot_set_joints(w, r, j1, v1, 1) == 0);
     CHECK(cn_robot_link_poses(w, r, part, 3) == 3);
     CHECK(memcmp(part + 14, out + 14, 7 * sizeof(double)) != 0);  // the last link moved
+    // the base pose it has leaves every link where it is; away and back poses them all again
     CHECK(cn_object_get_pose(w, r, base) == 0 && cn_object_set_pose(w, r, base) == 0);
     CHECK(cn_robot_link_poses(w, r, whole, 3) == 3);
+    CHECK(memcmp(part, whole, sizeof part) == 0);
+    double away[7] = {1, 2, 0, 0, 0, 0.6, 0.8}, moved[21];
+    CHECK(cn_object_set_pose(w, r, away) == 0 && cn_robot_link_poses(w, r, moved, 3) == 3);
+    CHECK(std::fabs(moved[0] - 1) < 1e-12 && std::fabs(moved[1] - 2) < 1e-12);
+    CHECK(cn_object_set_pose(w, r, base) == 0 && cn_robot_link_poses(w, r, whole, 3) == 3);
     CHECK(memcmp(part, whole, sizeof part) == 0);
     double one = -1, all[2];
     CHECK(cn_robot_get_joint(w, r, 1, &one) == 0 && one == 0.3);
