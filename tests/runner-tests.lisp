@@ -379,3 +379,23 @@ code, standard output (trimmed) and error output."
             ;; a worker of slot 1 keeps to the second CPU it may use; with pinning off, to all
             (progn (is (equal (list (second cpus) (list (second cpus))) pinned) "~s" out)
                    (is (equal (list nil cpus) free))))))))
+
+(test workers-are-left-free-by-the-environment-of-their-run
+  ;; the saved core was built without CRAM_PLANS_PIN_WORKERS: the worker's own environment counts
+  (multiple-value-bind (code core) (core-script)
+    (is (eql 0 code))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (list "env" "CRAM_PLANS_PIN_WORKERS=0" "sbcl" "--core" core "--noinform"
+                                "--non-interactive" "--no-userinit" "--no-sysinit" "--eval"
+                                "(progn (prin1 (sb-thread:join-thread
+                                                (sb-thread:make-thread
+                                                 (lambda ()
+                                                   (list (cram-plans-demo::pin-to-slot-cpu 1)
+                                                         (cpl::mask-cpus (cpl::thread-cpu-mask)))))))
+                                        (prin1 (cpl::mask-cpus (cpl::thread-cpu-mask)))
+                                        (terpri))")
+                          :output :string :error-output :string :ignore-error-status t)
+      (is (eql 0 code) "~a" err)
+      (with-input-from-string (s out)
+        (let ((in-thread (ignore-errors (read s))) (cpus (ignore-errors (read s))))
+          (is (equal (list nil cpus) in-thread) "left on every CPU it may use: ~s" out))))))

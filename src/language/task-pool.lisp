@@ -43,26 +43,31 @@ thread started by the plan (and so kept on the plan's CPU from its start) gets b
 
 (defconstant +cpu-mask-bytes+ 128 "The size of Linux's cpu_set_t (1024 CPUs).")
 
+(defmacro %affinity-call (name mask)
+  "Call sched_getaffinity or sched_setaffinity (NAME, a string) for the calling thread with the
+byte vector MASK; true when it succeeded."
+  (let ((m (gensym "MASK")))
+    `(let ((,m ,mask))
+       (sb-sys:with-pinned-objects (,m)
+         (zerop (sb-alien:alien-funcall
+                 (sb-alien:extern-alien ,name (function sb-alien:int sb-alien:int
+                                                        sb-alien:unsigned-long
+                                                        sb-alien:system-area-pointer))
+                 0 +cpu-mask-bytes+ (sb-sys:vector-sap ,m)))))))
+
 (defun thread-cpu-mask ()
   "The CPU mask of the calling thread (a byte vector), or NIL when the system does not tell."
   (let ((mask (make-array +cpu-mask-bytes+ :element-type '(unsigned-byte 8) :initial-element 0)))
-    (sb-sys:with-pinned-objects (mask)
-      (and (zerop (sb-alien:alien-funcall
-                   (sb-alien:extern-alien "sched_getaffinity"
-                                          (function sb-alien:int sb-alien:int sb-alien:unsigned-long
-                                                    sb-alien:system-area-pointer))
-                   0 +cpu-mask-bytes+ (sb-sys:vector-sap mask)))
-           mask))))
+    (and (%affinity-call "sched_getaffinity" mask) mask)))
 
 (defun set-thread-cpu-mask (mask)
   "Let the calling thread run on the CPUs of MASK (a byte vector of THREAD-CPU-MASK). True when
 done."
-  (sb-sys:with-pinned-objects (mask)
-    (zerop (sb-alien:alien-funcall
-            (sb-alien:extern-alien "sched_setaffinity"
-                                   (function sb-alien:int sb-alien:int sb-alien:unsigned-long
-                                             sb-alien:system-area-pointer))
-            0 +cpu-mask-bytes+ (sb-sys:vector-sap mask)))))
+  (%affinity-call "sched_setaffinity" mask))
+
+(defun mask-cpu-count (mask)
+  "How many CPUs the CPU mask MASK (a byte vector of THREAD-CPU-MASK) holds."
+  (loop for byte across mask sum (logcount byte)))
 
 (defun mask-cpus (mask)
   "The CPUs (ascending) of the CPU mask MASK (a byte vector of THREAD-CPU-MASK)."

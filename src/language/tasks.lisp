@@ -331,7 +331,7 @@ and all threads joined before this returns. Returns the decision."
 afterwards. As is when this thread may run on one CPU only, or the system does not tell."
   (let* ((mask (and *keep-plans-on-one-cpu* *ordered-concurrency* (null *plan-cpu*)
                     (thread-cpu-mask)))
-         (cpu (and mask (rest (mask-cpus mask)) (current-cpu))))
+         (cpu (and mask (> (mask-cpu-count mask) 1) (current-cpu))))
     (if (and cpu (set-thread-cpu-mask (cpu-mask cpu)))
         (unwind-protect (let ((*plan-cpu* cpu) (*plan-free-mask* mask)) (funcall thunk))
           (set-thread-cpu-mask mask))
