@@ -155,13 +155,14 @@ obstacles."
                          ;; calls); the value is the place check's (the sample it put the
                          ;; object down at)
                          :accept (lambda (pose)
-                                   (and (or (null grasp) (object-graspable-from-p grasp pose))
-                                        (let ((placed (or (null place)
+                                   (let ((placed (and (or (null grasp)
+                                                          (object-graspable-from-p grasp pose))
+                                                      (or (null place)
                                                           (apply #'object-placeable-from-p
-                                                                 (append place (list pose))))))
-                                          (and placed
-                                               (or (null see) (object-visible-from-p see pose))
-                                               placed)))))))
+                                                                 (append place (list pose)))))))
+                                     (and placed
+                                          (or (null see) (object-visible-from-p see pose))
+                                          placed))))))
         (if (and place *places-to-leave*)
             ;; a base pose from which the object leaves the later objects room, else any
             (handler-case (let ((*require-room* t)) (check))
