@@ -305,6 +305,39 @@
                                            (for (desig:an object (name mug-1)))))))
       (is (< (abs (- (cl-transforms:z (cl-transforms:origin pose)) (+ 0.85 lift))) 0.005)))))
 
+(test a-for-object-missing-by-name-is-sized-by-its-type
+  ;; CRAM's cleaning destinations name the FOR object some-name: the place is for an object of
+  ;; its type, kept off the edges by such an object's footprint and lifted by its origin height
+  (in-kitchen
+    (btr:add-object btr:*current-bullet-world* :mesh 'bowl-1
+                    (cl-transforms:make-pose (cl-transforms:make-3d-vector -0.9 1.0 0.9)
+                                             (cl-transforms:make-identity-rotation))
+                    :mesh :bowl :mass 0.2 :types '(:bowl))
+    (flet ((region (for)
+             (costmap:seed-costmaps 6)
+             (let ((d (if for
+                          (let ((?for for))
+                            (desig:a location (on (desig:an object (urdf-name sink-area-surface)
+                                                                   (part-of iai-kitchen)))
+                                     (for ?for)))
+                          (desig:a location (on (desig:an object (urdf-name sink-area-surface)
+                                                                 (part-of iai-kitchen)))))))
+               (let ((z (cl-transforms:z (cl-transforms:origin (desig:reference d))))
+                     (c (costmap:designator-costmap d)))
+                 (list (loop for x from 1.2d0 to 1.95d0 by 0.01d0
+                             sum (loop for y from -0.35d0 to 1.4d0 by 0.01d0
+                                       count (> (costmap:get-map-value c x y) 0)))
+                       z)))))
+      (destructuring-bind (plain plain-z) (region nil)
+        (destructuring-bind (named named-z) (region (desig:an object (type bowl) (name bowl-1)))
+          (destructuring-bind (missing missing-z) (region (desig:an object (type bowl) (name some-name)))
+            (is (< named plain) "the bowl's footprint keeps places off the edges")
+            (is (= named missing) "a missing name is sized as the bowl of its type")
+            (is (> named-z plain-z) "lifted by the bowl's origin height")
+            (is (< (abs (- named-z missing-z)) 1d-6))))
+        ;; a type the belief state has no item of: the surface as it is
+        (is (equal (list plain plain-z) (region (desig:an object (type cup) (name some-name)))))))))
+
 (test on-avoids-objects-already-there
   (in-kitchen
     (costmap:seed-costmaps 8)

@@ -175,7 +175,8 @@ stands for, when the robot holds it; else NIL."
 standing at BASE (a map pose), turns it no more than it is turned in hand now, else NIL. Its
 places come in that orientation first (an object held by its side goes down from where the
 robot stands without turning the wrist)."
-  (let ((item (held-item designator :for)))
+  (let* ((robot (btr:get-robot-object))
+         (item (let ((o (for-object designator))) (and o robot (btr:object-attached robot o) o))))
     (when item
       (+ (cl-transforms:get-yaw (cl-transforms:orientation base))
          (- (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose item)))
@@ -263,9 +264,7 @@ margin (half the size of the FOR object, when given), away from the items alread
 height is the surface top, plus the FOR object's height of its origin above its bottom. Poses
 for a FOR object come in four orientations, quarter turns about the vertical (the first
 unturned), so that an object held by its side can be put down from where the robot stands."
-  (let* ((for (desig:desig-prop-value designator :for))
-         (for-object (and for (typep for 'desig:object-designator)
-                          (object-designator-world-object for))))
+  (let ((for-object (for-object designator)))
     (multiple-value-bind (x0 y0 x1 y1 top env link) (surface-of surface)
       (multiple-value-bind (margin lift)
           (if for-object (object-footprint for-object) (values *surface-margin* 0d0))

@@ -159,10 +159,10 @@ tops of their boxes."
 
 (defun for-object-geometry (designator)
   "(values half-size lift object) of the FOR object of the location DESIGNATOR standing upright
-(OBJECT-FOOTPRINT) and the belief-state object; (values nil 0 nil) when it has none in the
-belief state."
+(OBJECT-FOOTPRINT) and the belief-state object (FOR-OBJECT); (values nil 0 nil) when it has
+none in the belief state."
   (let* ((for (desig:desig-prop-value designator :for))
-         (object (and (typep for 'desig:object-designator) (object-designator-world-object for))))
+         (object (for-object designator)))
     (when (and for (not (typep for 'desig:object-designator)))
       (error "Location designator ~a: (for ~s), expected an object designator." designator for))
     (if object

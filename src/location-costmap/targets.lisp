@@ -34,11 +34,13 @@ symbol name with the described robots; an error naming VALUE when no description
   (multiple-value-bind (lo hi) (btr:aabb object)
     (cl-transforms:v* (cl-transforms:v+ lo hi) 0.5d0)))
 
+(defun item-of-type-p (object type)
+  "True when OBJECT is an item with TYPE among its types (compared by name)."
+  (and (typep object 'btr:item)
+       (member (string type) (btr:item-types object) :key #'string :test #'string-equal)))
+
 (defun find-object-by-type (type &optional (world btr:*current-bullet-world*))
-  (find-if (lambda (o) (and (typep o 'btr:item)
-                            (member (string type) (btr:item-types o)
-                                    :key #'string :test #'string-equal)))
-           (btr:objects world)))
+  (find-if (lambda (o) (item-of-type-p o type)) (btr:objects world)))
 
 (defun object-designator-world-object (designator &optional (world btr:*current-bullet-world*))
   "The belief-state object an object DESIGNATOR means: that of its perceived data, else the one
@@ -51,6 +53,23 @@ named by its NAME property, else the first item of its TYPE; NIL when there is n
     (or (and identifier (find-world-object identifier world))
         (and name (find-world-object name world))
         (and (null name) type (find-object-by-type type world)))))
+
+(defun for-object (designator &optional (world btr:*current-bullet-world*))
+  "The belief-state object that the FOR property of the location DESIGNATOR stands for: the one
+its object designator means (OBJECT-DESIGNATOR-WORLD-OBJECT); else, when that names an object
+the belief state does not have (CRAM's cleaning destinations say (for (an object (type bowl)
+(name some-name)))), an item of its TYPE, one the robot holds first: the place is for an object
+of that kind. NIL without a FOR object designator or such an object."
+  (let ((for (desig:desig-prop-value designator :for)))
+    (when (typep for 'desig:object-designator)
+      (or (object-designator-world-object for world)
+          (let ((type (desig:desig-prop-value for :type))
+                (robot (ignore-errors (btr:get-robot-object world))))
+            (and type (desig:desig-prop-value for :name)
+                 (or (and robot
+                          (find-if (lambda (o) (and (item-of-type-p o type) (btr:object-attached robot o)))
+                                   (btr:objects world)))
+                     (find-object-by-type type world))))))))
 
 (defun object-designator-target (designator &optional (world btr:*current-bullet-world*))
   "(values point object) of an object DESIGNATOR: the perceived pose, or the belief-state
