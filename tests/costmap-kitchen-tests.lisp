@@ -338,6 +338,23 @@
         ;; a type the belief state has no item of: the surface as it is
         (is (equal (list plain plain-z) (region (desig:an object (type cup) (name some-name)))))))))
 
+(test a-for-object-missing-by-name-is-the-held-one-of-its-type
+  ;; of two items of the type, the one the robot holds is the one a place is for
+  (in-kitchen
+    (flet ((bowl (name x)
+             (btr:add-object btr:*current-bullet-world* :mesh name
+                             (cl-transforms:make-pose (cl-transforms:make-3d-vector x 1.0 0.9)
+                                                      (cl-transforms:make-identity-rotation))
+                             :mesh :bowl :mass 0.2 :types '(:bowl))))
+      (let ((lying (bowl 'bowl-1 -0.9)) (held (bowl 'bowl-2 -1.1))
+            (place (desig:a location (for (desig:an object (type bowl) (name some-name))))))
+        (is (eq lying (costmap::for-object place)) "none held: the first of its type")
+        (btr:attach-object (btr:get-robot-object) held :link "l_gripper_palm_link")
+        (is (eq held (costmap::for-object place)))
+        (is (eq lying (costmap::for-object (desig:a location (for (desig:an object (name bowl-1))))))
+            "an object the belief state has by its name is that one")
+        (is (null (costmap::for-object (desig:a location (for (desig:an object (type cup) (name some-name)))))))))))
+
 (test on-avoids-objects-already-there
   (in-kitchen
     (costmap:seed-costmaps 8)
