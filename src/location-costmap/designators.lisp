@@ -164,20 +164,18 @@ belief state."
 (defun held-item (designator key)
   "The object of the belief state that the value of KEY in DESIGNATOR (an object designator)
 stands for, when the robot holds it; else NIL."
-  (let ((object (desig:desig-prop-value designator key))
-        (robot (btr:get-robot-object)))
-    (and robot (typep object 'desig:object-designator)
-         (let ((item (object-designator-world-object object)))
-           (and item (btr:object-attached robot item) item)))))
+  (let* ((object (desig:desig-prop-value designator key))
+         (item (and (typep object 'desig:object-designator)
+                    (object-designator-world-object object))))
+    (and (held-by-robot-p item) item)))
 
 (defun held-object-yaw-from (designator base)
   "When the FOR object of DESIGNATOR is held by the robot: the yaw (map) it has when the robot,
 standing at BASE (a map pose), turns it no more than it is turned in hand now, else NIL. Its
 places come in that orientation first (an object held by its side goes down from where the
 robot stands without turning the wrist)."
-  (let* ((robot (btr:get-robot-object))
-         (item (let ((o (for-object designator))) (and o robot (btr:object-attached robot o) o))))
-    (when item
+  (let ((item (for-object designator)))
+    (when (held-by-robot-p item)
       (+ (cl-transforms:get-yaw (cl-transforms:orientation base))
          (- (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose item)))
             (cl-transforms:get-yaw (cl-transforms:orientation (btr:pose (btr:get-robot-object)))))))))

@@ -39,6 +39,11 @@ symbol name with the described robots; an error naming VALUE when no description
   (and (typep object 'btr:item)
        (member (string type) (btr:item-types object) :key #'string :test #'string-equal)))
 
+(defun held-by-robot-p (object &optional (world btr:*current-bullet-world*))
+  "True when the robot of WORLD holds OBJECT (a belief-state object or NIL)."
+  (let ((robot (and object (ignore-errors (btr:get-robot-object world)))))
+    (and robot (btr:object-attached robot object) t)))
+
 (defun find-object-by-type (type &optional (world btr:*current-bullet-world*))
   (find-if (lambda (o) (item-of-type-p o type)) (btr:objects world)))
 
@@ -63,12 +68,10 @@ of that kind. NIL without a FOR object designator or such an object."
   (let ((for (desig:desig-prop-value designator :for)))
     (when (typep for 'desig:object-designator)
       (or (object-designator-world-object for world)
-          (let ((type (desig:desig-prop-value for :type))
-                (robot (ignore-errors (btr:get-robot-object world))))
+          (let ((type (desig:desig-prop-value for :type)))
             (and type (desig:desig-prop-value for :name)
-                 (or (and robot
-                          (find-if (lambda (o) (and (item-of-type-p o type) (btr:object-attached robot o)))
-                                   (btr:objects world)))
+                 (or (find-if (lambda (o) (and (item-of-type-p o type) (held-by-robot-p o world)))
+                              (btr:objects world))
                      (find-object-by-type type world))))))))
 
 (defun object-designator-target (designator &optional (world btr:*current-bullet-world*))
