@@ -348,7 +348,8 @@ robot, object or link) is signalled, not turned into a failing goal."
           (t (let* ((costmaps (remove nil (mapcar (lambda (b) (cut:var-value '?costmap b))
                                                   (let ((*break-on-lisp-errors* t))
                                                     (cut:force-ll
-                                                     (prolog `(desig-costmap ,designator ?costmap)))))))
+                                                     (prolog '(desig-costmap ?designator ?costmap)
+                                                             `((?designator . ,designator))))))))
                     (merged (and costmaps (merge-costmaps costmaps))))
                (when (>= (hash-table-count *designator-costmaps*) *max-cached-costmaps*)
                  (clrhash *designator-costmaps*))
