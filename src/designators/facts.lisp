@@ -68,9 +68,7 @@
 
 (defun location-grounding-generator (designator)
   "Location generator: the solutions of the LOCATION-GROUNDING predicate for DESIGNATOR."
-  (lazy-mapcar (lambda (bindings) (var-value '?solution bindings))
-               (prolog '(location-grounding ?designator ?solution)
-                       `((?designator . ,designator)))))
+  (prolog-solutions designator 'location-grounding))
 
 (register-location-generator 10 location-grounding-generator
   "Solutions of the Prolog predicate LOCATION-GROUNDING, e.g. a (POSE p) property.")

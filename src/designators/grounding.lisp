@@ -190,10 +190,12 @@ DESIGNATOR's chain. Returns it."
         (setf *grounding-goals* (acons predicate goal *grounding-goals*))
         goal)))
 
-(defun prolog-solutions (designator predicate check)
+(defun prolog-solutions (designator predicate &optional check)
+  "The lazy list of the ?GROUNDING values of (PREDICATE ?DESIGNATOR ?GROUNDING) with ?DESIGNATOR
+bound to DESIGNATOR, each passed to CHECK (when given) as it is read."
   (lazy-mapcar (lambda (bindings)
                  (let ((value (var-value '?grounding bindings)))
-                   (funcall check value)
+                   (when check (funcall check value))
                    value))
                (prolog (grounding-goal predicate) `((?designator . ,designator)))))
 
