@@ -145,3 +145,30 @@ test; COUNTER (a cons) counts the grid evaluations in its car and the cell tests
         (let ((yaw (first-yaw)))
           ;; 2.0 + 1.3 = 3.3, nearest quarter turn: pi
           (is (< (abs (cl-transforms:normalize-angle (- yaw pi))) 1d-6) "first yaw ~,3f, expected pi" yaw))))))
+
+(test costmap-seeding-makes-sbcls-random-states
+  "A costmap's random state, seeded from its integer seed by the costmap's own key
+initialisation, is the state SBCL's SEED-RANDOM-STATE makes from that seed: the same words and
+the same draws, for seeds below and above 32 bits (the costmaps' seeds are up to 62 bits)."
+  (is-true costmap::*key-seeding-p*)
+  (let ((seeds (sb-ext:seed-random-state 2024)))
+    (dolist (seed (append '(0 1 #xFFFFFFFF #x100000000 #x3FFFFFFFFFFFFFFF)
+                          (loop repeat 50 collect (random (expt 2 62) seeds))))
+      (let ((ours (costmap::seeded-random-state seed))
+            (sbcls (sb-ext:seed-random-state seed)))
+        (is (equalp (sb-kernel::random-state-state sbcls) (sb-kernel::random-state-state ours))
+            "seed ~d: the state words differ" seed)
+        (is (equal (loop repeat 1000 collect (random 1000003 sbcls))
+                   (loop repeat 1000 collect (random 1000003 ours)))
+            "seed ~d: the draws differ" seed))))
+  ;; a costmap seeded with an integer samples as one given the state SBCL makes from it
+  (flet ((samples (random-state)
+           (let ((costmap (make-instance 'costmap:location-costmap :width 2 :height 2
+                                                        :resolution 0.05 :origin-x -1 :origin-y -1
+                                                        :random-state random-state)))
+             (costmap:register-cost-function costmap (lambda (x y) (+ 1d0 (* x x) y)) 'bowl)
+             (mapcar (lambda (p) (let ((o (cl-transforms:origin p)))
+                                   (list (cl-transforms:x o) (cl-transforms:y o))))
+                     (cut:force-ll (cut:lazy-take 20 (costmap:costmap-samples costmap)))))))
+    (let ((seed 987654321987654))
+      (is (equal (samples (sb-ext:seed-random-state seed)) (samples seed))))))

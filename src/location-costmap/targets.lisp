@@ -21,13 +21,16 @@ symbol name with the described robots; an error naming VALUE when no description
   (member (string-left-trim "/" frame) '("map") :test #'string=))
 
 (defun pose-in-map (pose what)
-  "POSE (a pose or pose-stamped) as a CL-TRANSFORMS:POSE in the map frame."
+  "POSE (a pose or pose-stamped) as a CL-TRANSFORMS:POSE in the map frame. WHAT names POSE in
+the error when it is neither: a string, or a function of no arguments that makes one (so that
+a description is printed only for the error)."
   (cond ((typep pose 'cl-transforms-stamped:pose-stamped)
          (if (map-frame-p (cl-transforms-stamped:frame-id pose))
              (cl-transforms-stamped:pose-stamped->pose pose)
              (cl-transforms-stamped:pose-stamped->pose (cram-tf:ensure-pose-in-frame pose "map"))))
         ((typep pose 'cl-transforms:pose) pose)
-        (t (error "~a: expected a pose or pose-stamped, got ~s." what pose))))
+        (t (error "~a: expected a pose or pose-stamped, got ~s."
+                  (if (functionp what) (funcall what) what) pose))))
 
 (defun object-center (object)
   "The centre of OBJECT's bounding box."
@@ -95,7 +98,8 @@ object, or the reference of its LOCATION property."
 version (DESIG:CURRENT-DESIG), so that a robot location relative to a target follows the
 target to its next solution when a plan retries with one."
   (let ((solution (desig:reference (desig:current-desig designator))))
-    (values (cl-transforms:origin (pose-in-map solution (format nil "solution of ~a" designator)))
+    (values (cl-transforms:origin
+             (pose-in-map solution (lambda () (format nil "solution of ~a" designator))))
             nil)))
 
 (defun target-of (value &optional (world btr:*current-bullet-world*))
