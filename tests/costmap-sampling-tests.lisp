@@ -172,3 +172,19 @@ the same draws, for seeds below and above 32 bits (the costmaps' seeds are up to
                      (cut:force-ll (cut:lazy-take 20 (costmap:costmap-samples costmap)))))))
     (let ((seed 987654321987654))
       (is (equal (samples (sb-ext:seed-random-state seed)) (samples seed))))))
+
+(test a-target-that-is-no-pose-is-named-in-its-error
+  "A location's solution that is neither a pose nor a pose-stamped is an error naming it as its
+caller describes it, a string or a description made only for the error."
+  (let ((made 0))
+    (is (search "solution of the cup's place"
+                (handler-case (progn (costmap::pose-in-map 42 (lambda () (incf made)
+                                                                "solution of the cup's place"))
+                                     "")
+                  (error (e) (princ-to-string e)))))
+    (is (= 1 made))
+    (costmap::pose-in-map (cl-transforms:make-identity-pose) (lambda () (incf made) "never"))
+    (is (= 1 made) "a pose needs no description")
+    (is (search "target pose"
+                (handler-case (progn (costmap::pose-in-map "here" "target pose") "")
+                  (error (e) (princ-to-string e)))))))

@@ -374,11 +374,20 @@ struct KinematicRest {
       }
     }
     dw->setForceUpdateAllAabbs(false);
+    // the pairs of everything added or moved since the last steps, searched at once (outside
+    // the physics the broadphase defers that search, see World::World); during the steps the
+    // pairs of the moving bodies are found as they move, not by searching the broadphase's
+    // trees every step (33 boxes falling onto a plane for 1 s, runs alternating: 2-5 % less)
+    bp = static_cast<btDbvtBroadphase *>(dw->getBroadphase());
+    bp->calculateOverlappingPairs(w.dispatcher);
+    bp->m_deferedcollide = false;
   }
   ~KinematicRest() {
+    bp->m_deferedcollide = true;
     for (btCollisionObject *co : slept) co->forceActivationState(DISABLE_DEACTIVATION);
     dw->setForceUpdateAllAabbs(true);
   }
+  btDbvtBroadphase *bp = nullptr;
 };
 const double CN_REST_SPEED = 1e-2, CN_REST_SPIN = 1e-1, CN_REST_TIME = 0.1;
 
