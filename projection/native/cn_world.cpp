@@ -2,6 +2,7 @@
 #include "cn_internal.hpp"
 
 #include <cstring>
+#include <optional>
 
 namespace cn {
 
@@ -357,13 +358,12 @@ namespace {
 struct KinematicRest {
   btDiscreteDynamicsWorld *dw;
   std::vector<btCollisionObject *> slept;
-  // STEPS: the number of steps to come (one step searches the trees once anyway)
-  KinematicRest(World &w, int steps) : dw(w.dw) {
+  explicit KinematicRest(World &w) : dw(w.dw) {
     btCollisionObjectArray &all = dw->getCollisionObjectArray();
     // the bounding boxes of the bodies teleported since the last query, and of the dynamic
     // bodies (the last steps moved them), before the kinematic bodies stop being updated; the
     // others are what they were (updating every body moved each into the broadphase's dynamic
-    // tree and searched the trees for its pairs again, a third of a simulate call)
+    // tree, to be searched for its pairs again)
     sync_aabbs(w);
     for (int i = 0; i < all.size(); ++i)
       if (!all[i]->isStaticOrKinematicObject()) dw->updateSingleAabb(all[i]);
@@ -375,22 +375,26 @@ struct KinematicRest {
       }
     }
     dw->setForceUpdateAllAabbs(false);
-    // the pairs of everything added or moved since the last steps, searched at once (outside
-    // the physics the broadphase defers that search, see World::World); during the steps the
-    // pairs of the moving bodies are found as they move, not by searching the broadphase's
-    // trees every step (33 boxes falling onto a plane for 1 s, runs alternating: 2-5 % less)
-    bp = static_cast<btDbvtBroadphase *>(dw->getBroadphase());
-    if (steps > 1) {
-      bp->calculateOverlappingPairs(w.dispatcher);
-      bp->m_deferedcollide = false;
-    }
   }
   ~KinematicRest() {
-    bp->m_deferedcollide = true;
     for (btCollisionObject *co : slept) co->forceActivationState(DISABLE_DEACTIVATION);
     dw->setForceUpdateAllAabbs(true);
   }
-  btDbvtBroadphase *bp = nullptr;
+};
+
+// For the steps of one simulate call (after KinematicRest brought the boxes up to date): the
+// pairs of everything added or moved since the last steps are searched at once (outside the
+// physics the broadphase defers that search, see World::World), and during the steps the
+// moving bodies' pairs are found as they move, as Bullet does by default, not by searching
+// the broadphase's trees every step. A single step searches the trees once anyway, and needs
+// none of this.
+struct PairsFoundAsBodiesMove {
+  btDbvtBroadphase *bp;
+  explicit PairsFoundAsBodiesMove(World &w) : bp(static_cast<btDbvtBroadphase *>(w.broadphase)) {
+    bp->calculateOverlappingPairs(w.dispatcher);
+    bp->m_deferedcollide = false;
+  }
+  ~PairsFoundAsBodiesMove() { bp->m_deferedcollide = true; }
 };
 const double CN_REST_SPEED = 1e-2, CN_REST_SPIN = 1e-1, CN_REST_TIME = 0.1;
 
@@ -422,7 +426,7 @@ int cn_world_step(int wh, double dt) {
   return guard([&] {
     World &w = world(wh);
     check_positive(dt, "time step dt");
-    KinematicRest rest(w, 1);
+    KinematicRest rest(w);
     w.dw->stepSimulation(dt, 0, dt);
     return 0;
   });
@@ -436,7 +440,9 @@ int cn_world_simulate(int wh, double seconds, double dt) {
     double steps = std::ceil(seconds / dt - 1e-9);
     if (steps > 1e8) fail(CN_E_ARG, "simulate %g s at dt %g needs %g steps, limit 1e8", seconds, dt, steps);
     int n = (int)steps;
-    KinematicRest rest(w, n);
+    KinematicRest rest(w);
+    std::optional<PairsFoundAsBodiesMove> pairs;
+    if (n > 1 && any_dynamic_body_awake(w)) pairs.emplace(w);
     // Stop early once nothing moves: every dynamic body asleep (Bullet zeroes the velocities
     // of a sleeping island), or every awake one slower than CN_REST_SPEED m/s and
     // CN_REST_SPIN rad/s for CN_REST_TIME s of simulated time. A body at rest stays at rest,
