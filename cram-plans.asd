@@ -83,6 +83,7 @@
                (:file "terms")
                (:file "predicates")
                (:file "compiler")
+               (:file "guards")
                (:file "clauses")
                (:file "control")
                (:file "database")
@@ -500,6 +501,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :serial t
   :components ((:file "designators-tests")
                (:file "designators-grounding-tests")
+               (:file "designator-type-index-tests")
                (:file "designator-classes-tests")))
 
 (defsystem "cram-plans/tests/executive"

@@ -161,27 +161,36 @@ and BUCKETS are parallel lists, the keys distinct under EQUAL."
 
 (defun clause-selection (clauses)
   "How an entry selects among CLAUSES by the first argument of a call: NIL when every clause
-has a variable first argument (all are tried); else the function of a run-time atom returning
-its clauses (those with that key or a variable first argument, in order) and, second value, the
-clauses for a compound first argument."
-  (unless (every (lambda (c) (= 0 (clause-kind c))) clauses)
-    (let ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
-          (cons-clauses (remove 1 clauses :key #'clause-kind))
-          (table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
-      ;; bucket per atom key: the clauses with that key or a variable first argument
-      (dolist (c clauses)
-        (case (clause-kind c)
-          (0 (push c vars-so-far)
-           (maphash (lambda (k bucket) (setf (gethash k table) (cons c bucket))) table))
-          (1 (let ((bucket (gethash (clause-key c) table :none)))
-               (when (eq bucket :none)
-                 (push (clause-key c) keys))
-               (setf (gethash (clause-key c) table)
-                     (cons c (if (eq bucket :none) vars-so-far bucket)))))))
-      (setf keys (nreverse keys))
-      (values (make-key-lookup keys (mapcar (lambda (k) (reverse (gethash k table))) keys)
-                               var-clauses)
-              cons-clauses))))
+has a variable first argument and none has a first-goal guard (all are tried); else the
+function of a run-time atom or object returning its clauses (those with that key or a variable
+first argument, in order; for an object, the guarded ones only when GUARD-SELECTION keeps
+them) and, second value, the clauses for a compound first argument."
+  (let ((guarded (guard-selection (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))))
+    (if (every (lambda (c) (= 0 (clause-kind c))) clauses)
+        (and guarded (values guarded clauses))
+        (let ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
+              (cons-clauses (remove 1 clauses :key #'clause-kind))
+              (table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
+          ;; bucket per atom key: the clauses with that key or a variable first argument
+          (dolist (c clauses)
+            (case (clause-kind c)
+              (0 (push c vars-so-far)
+               (maphash (lambda (k bucket) (setf (gethash k table) (cons c bucket))) table))
+              (1 (let ((bucket (gethash (clause-key c) table :none)))
+                   (when (eq bucket :none)
+                     (push (clause-key c) keys))
+                   (setf (gethash (clause-key c) table)
+                         (cons c (if (eq bucket :none) vars-so-far bucket)))))))
+          (setf keys (nreverse keys))
+          (let ((lookup (make-key-lookup keys (mapcar (lambda (k) (reverse (gethash k table))) keys)
+                                         var-clauses)))
+            (values (if guarded
+                        (lambda (a)
+                          (let ((selected (funcall (the function lookup) a)))
+                            ;; an object no clause names: its variable clauses, by their guards
+                            (if (eq selected var-clauses) (funcall (the function guarded) a) selected)))
+                        lookup)
+                    cons-clauses))))))
 
 (defun make-clauses-entry (clauses)
   "The entry function running CLAUSES, selecting them by the first argument of the call."

@@ -61,6 +61,7 @@ Decisions on CRAM's quirks:
    #:with-production-handlers
    #:add-fact #:remove-facts #:predicate
    ;; native predicates
+   #:register-first-goal-guard
    #:def-native-predicate #:solve-continue #:unify-terms #:unify-each #:deref-term
    #:resolve-term
    ;; built-in predicate names that are not Common Lisp symbols

@@ -38,6 +38,33 @@
                                 collect e)
                     cont)))))
 
+;; Grounding and process-module rules begin with (desig-prop ?designator (:type :a-type)): a
+;; call for a designator of another type passes them over without trying them.
+
+(defun type-guard-key (args)
+  "The type keyword a guard goal (desig-prop ?d (:type <keyword>)) requires, ARGS being its
+arguments after ?d; NIL for any other goal."
+  (let ((p (first args)))
+    (and (null (rest args)) (consp p) (eq (first p) :type) (consp (rest p)) (null (cddr p))
+         (keywordp (second p)) (second p))))
+
+(defun designator-type-key (object)
+  "What DESIG-PROP's (:type <keyword>) goals can match in OBJECT: the keyword of its single
+\(:type value) entry; NIL when it is no designator or has no keyword type (every such goal
+fails); :ALL when it has several type entries or a variable for a type."
+  (if (typep object 'designator)
+      (let ((found :none))
+        (dolist (e (description object) (if (eq found :none) nil found))
+          (when (and (consp e) (eq (car e) :type) (consp (cdr e)) (null (cddr e)))
+            (let ((v (second e)))
+              (cond ((not (eq found :none)) (return :all))
+                    ((keywordp v) (setf found v))
+                    ((and (symbolp v) (is-var v)) (return :all))
+                    (t (setf found nil)))))))
+      nil))
+
+(register-first-goal-guard 'desig-prop #'type-guard-key #'designator-type-key)
+
 (def-fact-group designator-inspection ()
   (<- (designator ?type ?description ?designator)
     (lisp-fun make-designator ?type ?description ?designator))
