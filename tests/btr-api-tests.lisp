@@ -180,6 +180,20 @@
         (is (search ":UP" (princ-to-string e))))
       (is (= 0.5d0 (btr:joint-state lifter "lift"))))))
 
+(test robot-joint-values-are-the-joint-states-by-index
+  (let ((w (small-world)))
+    (btr:add-object w :urdf :lifter '((2 0 0) (0 0 0 1)) :urdf *arm-urdf*)
+    (let ((lifter (btr:object w :lifter)))
+      (btr:set-robot-state-from-joints '(("lift" 0.3d0)) lifter)
+      (let ((values (btr:robot-joint-values lifter)))
+        (is (= (length (btr:joint-names lifter)) (length values)))
+        (dolist (joint (btr:joint-names lifter))
+          (is (= (btr:joint-state lifter joint) (aref values (btr:joint-index lifter joint)))))
+        (is (= 0.3d0 (aref values (btr:joint-index lifter "lift"))))
+        ;; a fresh vector: setting a joint later does not change it
+        (btr:set-robot-state-from-joints '(("lift" 0.1d0)) lifter)
+        (is (= 0.3d0 (aref values (btr:joint-index lifter "lift"))))))))
+
 (test bad-poses-are-named-after-the-object
   (let* ((w (small-world)) (cup (btr:object w 'cup)))
     (flet ((message (pose)

@@ -31,7 +31,7 @@
    #:add-costmap-function-object #:add-costmap-sample-object #:add-vis-axis-object
    #:costmap-vis-object #:clear-costmap-vis-object
    ;; robots and environments
-   #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states
+   #:urdf #:link-names #:joint-names #:link-pose #:joint-state #:joint-states #:robot-joint-values
    #:set-robot-state-from-joints #:joint-limits #:joint-lower-limit #:joint-upper-limit
    #:get-robot-object #:get-robot-name #:get-environment-object #:*environment-name*
    #:robot-object-p #:link-exists-p #:object-handle #:world-lock #:object-kind #:object-spec #:link-index #:joint-index

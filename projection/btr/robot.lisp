@@ -75,6 +75,11 @@ model's own strings (the IK chains' too), found by identity before they are hash
   (set-robot-state-from-joints (list (list joint value)) robot)
   value)
 
+(defun robot-joint-values (robot)
+  "Every joint value of ROBOT in joint index order (JOINT-INDEX), mimic joints computed: a
+fresh vector of doubles, read in one call (JOINT-STATE reads one joint)."
+  (native:robot-joints (whandle robot) (object-handle robot)))
+
 (defun joint-states (robot)
   "Alist (joint-name . position) of every movable joint of ROBOT."
   (let ((v (native:robot-joints (whandle robot) (object-handle robot))))

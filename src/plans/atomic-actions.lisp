@@ -288,19 +288,28 @@ robot description (:PARK, :CARRY, :POINT ...) or joint states already."
 CPOE:ARMS-POSITIONED-AT.")
 
 (defun angle-difference (a b)
-  (let ((d (- a b))) (abs (atan (sin d) (cos d)))))
+  "|A - B| wrapped into [0, pi] (radians; reals)."
+  (let ((d (- (float a 1d0) (float b 1d0))))
+    (declare (type double-float d))
+    (abs (atan (sin d) (cos d)))))
 
 (defun arms-positioned-p (left-configuration right-configuration
                           &optional (delta *arm-joints-convergence-delta*))
   "True when the robot's left and right arm joints are within DELTA of LEFT-CONFIGURATION and
 RIGHT-CONFIGURATION (configuration names such as :PARK, or joint states); NIL as a
 configuration asks nothing of that arm."
-  (let ((robot (btr:get-robot-object)))
+  (let ((robot (btr:get-robot-object))
+        (joints nil))   ; every joint value of the robot, read once when a joint is asked for
     (and robot
          (loop for arm in '(:left :right)
                for configuration in (list left-configuration right-configuration)
                always (loop for (joint value) in (arm-configuration-joint-states arm configuration)
-                            always (< (angle-difference (btr:joint-state robot joint) value) delta))))))
+                            for index = (btr:joint-index robot joint)
+                            always (< (angle-difference
+                                       (aref (or joints (setf joints (btr:robot-joint-values robot)))
+                                             index)
+                                       value)
+                                      delta))))))
 
 (def-fact-group arm-occasions (cpoe:arms-positioned-at)
   (<- (cpoe:arms-positioned-at ?left-configuration ?right-configuration)
