@@ -49,6 +49,7 @@
                          (desig:make-designator :motion '((:type "going")))
                          (desig:make-designator :motion '((:speed 1)))
                          (desig:make-designator :motion '((:type ?some-variable)))
+                         (desig:make-designator :motion (list (list :type (vector 1 2))))
                          :an-atom :another-atom 42 "text" (list 1 2))))
     (is (member 'desig:desig-prop prolog::*first-goal-guards*
                 :key #'prolog::first-goal-guard-functor))
@@ -62,7 +63,11 @@
       (is (equal '(:any-type :unguarded) (fourth indexed)))
       (is (equal '(:going-1 :any-type :any-type :looking :unguarded) (fifth indexed)))
       (is (equal '(:any-type :unguarded :string-type) (sixth indexed)))
-      (is (equal '(:atom :unguarded) (nth 8 indexed))))))
+      (is (equal '(:atom :unguarded) (nth 9 indexed)))
+      (is (eq :all (desig::designator-type-key (nth 8 arguments))))
+      (is (eq :all (desig::designator-type-key (nth 4 arguments))))
+      (is (eq :going (desig::designator-type-key (first arguments))))
+      (is (null (desig::designator-type-key (nth 6 arguments)))))))
 
 ;;; A guard of the test's own, which counts the goals it runs: the index passes the clauses
 ;;; over without running their guards.

@@ -51,7 +51,7 @@ arguments after ?d; NIL for any other goal."
 (defun designator-type-key (object)
   "What DESIG-PROP's (:type <keyword>) goals can match in OBJECT: the keyword of its single
 \(:type value) entry; NIL when it is no designator or has no keyword type (every such goal
-fails); :ALL when it has several type entries or a variable for a type."
+fails); :ALL when it has several type entries or a type that may be a variable."
   (if (typep object 'designator)
       (let ((found :none))
         (dolist (e (description object) (if (eq found :none) nil found))
@@ -60,7 +60,10 @@ fails); :ALL when it has several type entries or a variable for a type."
               (cond ((not (eq found :none)) (return :all))
                     ((keywordp v) (setf found v))
                     ((and (symbolp v) (is-var v)) (return :all))
-                    (t (setf found nil)))))))
+                    ;; constants that no keyword unifies with
+                    ((typep v '(or symbol string number character cons)) (setf found nil))
+                    ;; anything else (a Prolog variable object, ...): every clause is tried
+                    (t (return :all)))))))
       nil))
 
 (register-first-goal-guard 'desig-prop #'type-guard-key #'designator-type-key)
