@@ -22,9 +22,10 @@ to its key, or :ALL when the guard may accept it whatever the key."
 (defun register-first-goal-guard (functor pattern-key object-key)
   "Make FUNCTOR (a predicate symbol) a first-goal guard. A clause with a variable first argument
 ?X whose body begins with (FUNCTOR ?X . args) is tried only for calls whose first argument has
-the key (funcall PATTERN-KEY args) (when that is not NIL), the key of a first argument being
-\(funcall OBJECT-KEY argument), :ALL for an argument it does not know. The promise behind it:
-the guard goal fails whenever the two keys differ. Every predicate selects its clauses anew."
+the key (funcall PATTERN-KEY args) (when that is not NIL). The key of a call's first argument
+is (funcall OBJECT-KEY argument): :ALL for an argument it does not know, NIL for one that no
+guard goal accepts. Keys compare with EQUAL. The promise behind it: the guard goal fails
+whenever the two keys differ. Every predicate selects its clauses anew."
   (check-type functor symbol)
   (let ((guard (make-first-goal-guard functor (coerce pattern-key 'function)
                                       (coerce object-key 'function))))
@@ -60,16 +61,16 @@ VAR-CLAUSES its guards do not rule out, in order."
     ;; one guard predicate per index: the clauses guarded by another are kept as unguarded
     (when guard
       (let* ((keys (mapcar (lambda (g) (and (eq (first g) guard) (second g))) guards))
-             (distinct (remove-duplicates (remove nil keys) :test #'eql :from-end t))
+             (distinct (remove-duplicates (remove nil keys) :test #'equal :from-end t))
              (unguarded (loop for c in var-clauses for k in keys unless k collect c))
              (buckets (mapcar (lambda (key)
                                 (cons key (loop for c in var-clauses for k in keys
-                                                when (or (null k) (eql k key)) collect c)))
+                                                when (or (null k) (equal k key)) collect c)))
                               distinct))
              (object-key (first-goal-guard-object-key guard)))
         (lambda (a)
           (let ((key (funcall object-key a)))
             (if (eq key :all)
                 var-clauses
-                (let ((bucket (assoc key buckets :test #'eql)))
+                (let ((bucket (assoc key buckets :test #'equal)))
                   (if bucket (cdr bucket) unguarded)))))))))

@@ -117,7 +117,17 @@
              ;; an object the guard does not know: every clause, as without the index
              (multiple-value-bind (answers goals) (guard-test-answers :some-atom)
                (is (equal '(:any) answers))
-               (is (= 3 goals))))
+               (is (= 3 goals)))
+             ;; keys compare with EQUAL: strings made afresh for each call match
+             (prolog:register-first-goal-guard
+              'guard-test-kind
+              (lambda (args) (and (keywordp (first args)) (copy-seq (symbol-name (first args)))))
+              (lambda (object) (if (guard-test-thing-p object)
+                                   (copy-seq (symbol-name (guard-test-thing-kind object)))
+                                   :all)))
+             (multiple-value-bind (answers goals) (guard-test-answers b)
+               (is (equal '(:b :any) answers))
+               (is (= 1 goals))))
         (setf prolog::*first-goal-guards* saved)
         (without-type-index (constantly nil))))))
 
