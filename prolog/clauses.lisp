@@ -165,11 +165,11 @@ has a variable first argument and none has a first-goal guard (all are tried); e
 function of a run-time atom or object returning its clauses (those with that key or a variable
 first argument, in order; for an object, the guarded ones only when GUARD-SELECTION keeps
 them) and, second value, the clauses for a compound first argument."
-  (let ((guarded (guard-selection (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))))
-    (if (every (lambda (c) (= 0 (clause-kind c))) clauses)
+  (let* ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
+         (guarded (guard-selection var-clauses)))
+    (if (= (length var-clauses) (length clauses))
         (and guarded (values guarded clauses))
-        (let ((var-clauses (remove-if-not (lambda (c) (= 0 (clause-kind c))) clauses))
-              (cons-clauses (remove 1 clauses :key #'clause-kind))
+        (let ((cons-clauses (remove 1 clauses :key #'clause-kind))
               (table (make-hash-table :test 'equal)) (keys '()) (vars-so-far '()))
           ;; bucket per atom key: the clauses with that key or a variable first argument
           (dolist (c clauses)

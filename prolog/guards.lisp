@@ -32,12 +32,18 @@ whenever the two keys differ. Every predicate selects its clauses anew."
     (with-database-lock ()
       (setf *first-goal-guards*
             (cons guard (remove functor *first-goal-guards* :key #'first-goal-guard-functor)))
-      (maphash (lambda (functor pred)
-                 (declare (ignore functor))
-                 (unless (or (pred-native pred) (pred-control pred))
-                   (invalidate-pred pred)))
-               *predicates*))
+      (reselect-all-clauses))
     functor))
+
+(defun reselect-all-clauses ()
+  "Make every predicate defined by clauses select them anew on its next call (after the guards
+changed)."
+  (with-database-lock ()
+    (maphash (lambda (functor pred)
+               (declare (ignore functor))
+               (unless (or (pred-native pred) (pred-control pred))
+                 (invalidate-pred pred)))
+             *predicates*)))
 
 (defun clause-guard (clause)
   "(values guard key) of CLAUSE's first body goal when it is a registered guard testing the

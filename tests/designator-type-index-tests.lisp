@@ -30,15 +30,11 @@
 (defun without-type-index (thunk)
   "THUNK's value with the designator-type index taken out of the database, restored after."
   (let ((saved prolog::*first-goal-guards*))
-    (flet ((reselect ()
-             (maphash (lambda (functor pred)
-                        (declare (ignore functor))
-                        (unless (or (prolog::pred-native pred) (prolog::pred-control pred))
-                          (prolog::invalidate-pred pred)))
-                      prolog::*predicates*)))
-      (unwind-protect (progn (setf prolog::*first-goal-guards* '()) (reselect) (funcall thunk))
-        (setf prolog::*first-goal-guards* saved)
-        (reselect)))))
+    (unwind-protect (progn (setf prolog::*first-goal-guards* '())
+                           (prolog::reselect-all-clauses)
+                           (funcall thunk))
+      (setf prolog::*first-goal-guards* saved)
+      (prolog::reselect-all-clauses))))
 
 (test designator-type-index-keeps-every-answer-in-order
   (let ((arguments (list (desig:a motion (type going))

@@ -82,7 +82,7 @@ fresh vector of doubles, read in one call (JOINT-STATE reads one joint)."
 
 (defun joint-states (robot)
   "Alist (joint-name . position) of every movable joint of ROBOT."
-  (let ((v (native:robot-joints (whandle robot) (object-handle robot))))
+  (let ((v (robot-joint-values robot)))
     (loop for n across (km-joint-names (%model robot))
           for info across (km-joint-info (%model robot))
           for i from 0

@@ -62,9 +62,7 @@ second value: whether it keeps anything."
 for the arms, torso and grippers it was found with."
   (let ((robot (btr:get-robot-object)))
     (map 'list (lambda (x) (round (* (the double-float x) 1d4)))
-         (the (simple-array double-float (*))
-              (cram-native:robot-joints (btr:world-handle (btr:world robot))
-                                        (btr:object-handle robot))))))
+         (the (simple-array double-float (*)) (btr:robot-joint-values robot)))))
 
 (defun judge-base-pose (pose accept what)
   "(values accepted hits) for the robot standing at POSE: HITS, what it touches there, and
