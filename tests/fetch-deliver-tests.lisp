@@ -525,7 +525,8 @@ sink behind it; either way the held object ends where it was, attached to the sa
                (x-list (d) (x-of d)))
           (is (= 1.0 (x-list (fd-plans::find-placing-sample (constantly t) (target) 3
                                                             :score score :best 1 :final #'final))))
-          (is (equal '(1d0 1.5d0 0.5d0) asked) "each sample could still be taken: ~s" asked)
+          (is (equal '(1d0 1.5d0) asked)
+              "only the samples that score best, while one of them may still be taken: ~s" asked)
           (setf asked '())
           (is (= 0.5 (x-list (fd-plans::find-placing-sample (constantly t) (target) 3
                                                             :score (constantly 0) :best 1
@@ -534,7 +535,29 @@ sink behind it; either way the held object ends where it was, attached to the sa
           (setf asked '())
           (is (= 1.0 (x-list (fd-plans::find-placing-sample (lambda (d) (/= (x-of d) 0.5))
                                                             (target) 3 :final #'final))))
-          (is (equal '(1d0 1.5d0) asked) "without a score, each that passes the predicate"))))))
+          (is (equal '(1d0 1.5d0) asked) "without a score, each that passes the predicate")
+          ;; none scores best: the highest score first (1.5 and 1.0 score 1, 0.5 scores 0)
+          (setf asked '())
+          (is (= 1.0 (x-list (fd-plans::find-placing-sample (constantly t) (target) 3
+                                                            :score score :best 2
+                                                            :final #'final))))
+          (is (equal '(1d0 1.5d0) asked) "the highest scores first, until one passes: ~s" asked)
+          ;; under REQUIRE-BEST, that one is found only when asked for
+          (setf asked '())
+          (multiple-value-bind (found fallback)
+              (fd-plans::find-placing-sample (constantly t) (target) 3 :score score :best 2
+                                                                       :require-best t
+                                                                       :final #'final)
+            (is (null found))
+            (is (null asked) "nothing asked before the fallback is: ~s" asked)
+            (is (functionp fallback))
+            (is (= 1.0 (x-list (funcall fallback))))
+            (is (equal '(1d0 1.5d0) asked) "asked when the fallback is: ~s" asked))
+          (is (equal '(nil nil)
+                     (multiple-value-list
+                      (fd-plans::find-placing-sample (constantly nil) (target) 3 :score score
+                                                     :best 2 :require-best t :final #'final)))
+              "no fallback when no sample passes the predicate"))))))
 
 (test an-object-is-put-down-leaving-room-for-the-objects-that-follow
   ;; a cup will go within 6 cm of the island's origin: the bottle put down there, or 5 cm
@@ -621,6 +644,9 @@ sink behind it; either way the held object ends where it was, attached to the sa
           (destructuring-bind (calls result) (check t)
             (is (null result) "no place leaves room")
             (is (plusp calls)))
+          (is (functionp (fd-plans::base-pose-verdict
+                          (fd-plans::placing-fallback-key bottle arm target base)))
+              "what it would have taken is kept to be found when asked for")
           (destructuring-bind (calls result) (check nil)
             (is (= 0 calls) "answered from the check that required room")
             (is (and result unchecked

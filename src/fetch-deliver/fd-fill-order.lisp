@@ -83,25 +83,27 @@ there is none for one with the best sample there is.")
   "The first of up to COUNT solutions of the location designator TARGET (each a designator of
 its equation chain), drawn one at a time in the costmap's order, that satisfies PREDICATE and
 FINAL (NIL: none), or NIL. With SCORE (a function of a solution, a number), the first one that
-satisfies them and scores BEST, else (unless REQUIRE-BEST) the first with the highest score
-among all COUNT solutions. Second value: the first with the highest score even under
-REQUIRE-BEST (NIL: none satisfied them). FINAL, the dearer part of the test, is asked only of a
-solution that satisfies PREDICATE and would be taken by its score, so that a solution that
-could not beat the one found is not tested further."
-  (let ((found nil) (found-score nil))
+satisfies them and scores BEST, else (unless REQUIRE-BEST) the one with the highest score among
+all COUNT solutions that satisfies them, the first of those with that score. Second value: that
+one even under REQUIRE-BEST, where it is not looked for at once but given as a function of no
+arguments that finds it (NIL when no solution satisfied PREDICATE), for a caller that may never
+need it. FINAL, the dearer part of the test, is asked of a solution that satisfies PREDICATE only
+when it would be taken: at once when it scores BEST (or without SCORE), and of the others only
+once no solution scores BEST, the highest scores first, until one passes."
+  (let ((others '()))                   ; (solution score) passing PREDICATE, not scoring BEST
     (flet ((final-p (current) (or (null final) (funcall final current))))
       (loop repeat count
             for current = target then (desig:next-solution current)
             while current
             when (funcall predicate current)
-              do (if (null score)
-                     (when (final-p current)
-                       (return-from find-placing-sample current))
-                     (let ((s (funcall score current)))
-                       (when (and (or (null found-score) (> s found-score)
-                                      (and best (>= s best)))
-                                  (final-p current))
-                         (when (and best (>= s best))
-                           (return-from find-placing-sample current))
-                         (setf found current found-score s))))))
-    (values (and (not require-best) found) found)))
+              do (let ((s (and score (funcall score current))))
+                   (if (or (null score) (and best (>= s best)))
+                       (when (final-p current)
+                         (return-from find-placing-sample current))
+                       (push (list current s) others))))
+      ;; the highest score first, the earlier first among equal scores
+      (let ((ranked (stable-sort (nreverse others) #'> :key #'second)))
+        (flet ((highest () (loop for (current) in ranked when (final-p current) return current)))
+          (cond ((null ranked) (values nil nil))
+                (require-best (values nil #'highest))
+                (t (let ((found (highest))) (values found found)))))))))

@@ -132,8 +132,10 @@ can be grasped again from where the robot stands (OBJECT-REGRASPABLE-AT-P)."
 
 (defvar *placing-fallback* nil
   "NIL, or a cons whose car CHECK-PLACING-COLLISIONS sets when it finds no sample that leaves
-*PLACES-TO-LEAVE* room while *REQUIRE-ROOM* is true: the map pose of the sample it would have
-taken without that requirement, or :NONE when no sample could be put down at all.")
+*PLACES-TO-LEAVE* room while *REQUIRE-ROOM* is true: :NONE when no sample could be put down,
+else a function of no arguments giving what it would have taken without that requirement, the
+map pose of that sample or :NONE (its final test, the re-grasp check, is asked only then; call
+it with the robot where the check had it, PLACING-FALLBACK-POSE).")
 
 (defun check-placing-collisions (object arm target &key first)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
@@ -168,9 +170,15 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
                              :require-best *require-room*)
       (when found (return-from %check-placing-collisions found))
       (when *placing-fallback*
-        ;; what a check that does not require room would have taken from these samples
+        ;; what a check that does not require room would take from these samples, found only
+        ;; when such a check asks for it (a later base pose that leaves room makes it moot)
         (setf (car *placing-fallback*)
-              (if best (pp-plans:pose-in-map (desig:reference best)) :none))))
+              (typecase best
+                (null :none)
+                (function (lambda ()
+                            (let ((sample (funcall best)))
+                              (if sample (pp-plans:pose-in-map (desig:reference sample)) :none))))
+                (t (pp-plans:pose-in-map (desig:reference best)))))))
     (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
@@ -393,9 +401,13 @@ down free of collisions; NIL when there is none. Checked in the belief state; th
 back. Within WITH-BASE-POSE-VERDICTS, a check while *REQUIRE-ROOM* is true that finds no
 sample leaving the later objects room keeps what it would have taken without that requirement
 \(or that nothing could be put down), and the check of the same base pose, robot state and
-place without the requirement answers from that instead of drawing samples again."
+place without the requirement answers from that instead of drawing samples again. The samples'
+re-grasp checks that this answer still needs are made only then (PLACING-FALLBACK-POSE): when
+another base pose leaves room, they are never made."
   (let* ((key (and (base-pose-verdicts-p) (placing-fallback-key object arm target pose)))
          (kept (and key (not *require-room*) (base-pose-verdict key))))
+    (when (functionp kept)
+      (setf kept (setf (base-pose-verdict key) (placing-fallback-pose kept pose))))
     (cond ((eq kept :none) nil)
           (kept (cl-transforms-stamped:pose->pose-stamped cram-tf:*fixed-frame* 0d0 kept))
           (t (let* ((*placing-fallback* (and key *require-room* (list nil)))
@@ -403,6 +415,17 @@ place without the requirement answers from that instead of drawing samples again
                (when (and *placing-fallback* (car *placing-fallback*))
                  (setf (base-pose-verdict key) (car *placing-fallback*)))
                found)))))
+
+(defun placing-fallback-pose (find pose)
+  "What FIND, a placing check's deferred fallback (*PLACING-FALLBACK*), gives with the robot
+standing at the base POSE (map) as that check had it: a map pose or :NONE; NIL when its checks
+fail as a placing check's failures are caught (CHECK-PLACING-FROM), so that the check is made
+afresh. The robot is put back."
+  (call-restoring-robot
+   (lambda ()
+     (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
+     (handler-case (urdf-proj::with-tcp-in-ee-kept (funcall find))
+       ((or common-fail:object-undeliverable desig:designator-error) () nil)))))
 
 (defun check-placing-from (object arm target pose)
   (call-restoring-robot
