@@ -133,9 +133,9 @@ can be grasped again from where the robot stands (OBJECT-REGRASPABLE-AT-P)."
 (defvar *placing-fallback* nil
   "NIL, or a cons whose car CHECK-PLACING-COLLISIONS sets when it finds no sample that leaves
 *PLACES-TO-LEAVE* room while *REQUIRE-ROOM* is true: :NONE when no sample could be put down,
-else a function of no arguments giving what it would have taken without that requirement, the
-map pose of that sample or :NONE (its final test, the re-grasp check, is asked only then; call
-it with the robot where the check had it, PLACING-FALLBACK-POSE).")
+else the function of no arguments (FIND-PLACING-SAMPLE's second value) that finds the sample it
+would have taken without that requirement, asking the re-grasp check only then
+\(PLACING-FALLBACK-POSE calls it with the robot where the check had it).")
 
 (defun check-placing-collisions (object arm target &key first)
   "The first of up to *PLACING-CHECK-SAMPLES* solutions of TARGET (a location designator) at
@@ -172,13 +172,7 @@ Signals OBJECT-UNDELIVERABLE when none passes, so that the delivery tries anothe
       (when *placing-fallback*
         ;; what a check that does not require room would take from these samples, found only
         ;; when such a check asks for it (a later base pose that leaves room makes it moot)
-        (setf (car *placing-fallback*)
-              (typecase best
-                (null :none)
-                (function (lambda ()
-                            (let ((sample (funcall best)))
-                              (if sample (pp-plans:pose-in-map (desig:reference sample)) :none))))
-                (t (pp-plans:pose-in-map (desig:reference best)))))))
+        (setf (car *placing-fallback*) (or best :none))))
     (cpl:fail 'common-fail:object-undeliverable
               :description (format nil "~a cannot be put down with the ~(~a~) arm at any sample of ~
                                         ~a from here." (object-text object) arm target))))
@@ -417,14 +411,15 @@ another base pose leaves room, they are never made."
                found)))))
 
 (defun placing-fallback-pose (find pose)
-  "What FIND, a placing check's deferred fallback (*PLACING-FALLBACK*), gives with the robot
-standing at the base POSE (map) as that check had it: a map pose or :NONE; NIL when its checks
-fail as a placing check's failures are caught (CHECK-PLACING-FROM), so that the check is made
-afresh. The robot is put back."
+  "The map pose of the sample FIND, a placing check's deferred fallback (*PLACING-FALLBACK*),
+finds with the robot standing at the base POSE (map) as that check had it, or :NONE when it
+finds none; NIL when its checks fail as a placing check's failures are caught
+\(CHECK-PLACING-FROM), so that the check is made afresh. The robot is put back."
   (call-restoring-robot
    (lambda ()
      (setf (btr:pose (btr:get-robot-object)) (pp-plans:pose-in-map pose))
-     (handler-case (urdf-proj::with-tcp-in-ee-kept (funcall find))
+     (handler-case (let ((sample (urdf-proj::with-tcp-in-ee-kept (funcall find))))
+                     (if sample (pp-plans:pose-in-map (desig:reference sample)) :none))
        ((or common-fail:object-undeliverable desig:designator-error) () nil)))))
 
 (defun check-placing-from (object arm target pose)
