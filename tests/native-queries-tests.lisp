@@ -145,6 +145,42 @@
       ;; outside the field of view: the camera turned to it still counts the pixels
       (is (zerop (visibility w (look-at '(0 0 0) '(-1 0 0)) target))))))
 
+(defun segmentation-count (world camera object)
+  "The pixels of OBJECT in WORLD's segmentation image (cn_render) from CAMERA, at the size the
+visibility query draws."
+  (let ((seg (nth-value 2 (render world camera :width 128 :height 96 :rgb nil :segmentation t))))
+    (loop for i below (length seg) by 2 count (= (aref seg i) object))))
+
+(test visibility-agrees-with-the-rendered-segmentation
+  ;; the visibility query draws its own images: the share of the target it reports is the share
+  ;; cn_render's segmentation images show (its pixels in the scene over its pixels alone) up to
+  ;; pixels on an edge, behind spheres, cylinders, a robot's links and over a ground plane
+  (with-world (w)
+    (let* ((ground (add-plane w))
+           (centre '(2.5 0.1 0.4))
+           (target (add-box w '(2.5 0.1 0.4 0 0 0.3826834 0.9238795) '(0.3 0.2 0.4)))
+           (others (list ground
+                         (add-sphere w '(1.4 0.05 0.5 0 0 0 1) 0.12)
+                         (add-cylinder w '(1.7 -0.15 0.3 0 0 0 1) 0.06 0.6)
+                         (add-urdf w *arm-urdf* :pose '(1.9 0.45 0 0 0 0 1))))
+           (alone (copy-world w))
+           (expected '()))
+      (unwind-protect
+           (progn
+             (dolist (o others) (remove-object alone o))
+             (dolist (eye '((0 0 1.2) (0.2 -0.5 0.5) (0 0.4 0.45) (1 0.9 1.5) (0.5 0 0.2)))
+               (let* ((cam (look-at eye centre))
+                      (share (/ (segmentation-count w cam target)
+                                (max 1 (segmentation-count alone cam target))))
+                      (f (visibility w cam target)))
+                 (push share expected)
+                 (is (< (abs (- f share)) 0.03d0)
+                     "from ~s: the query sees ~,3f of the box, the rendered images ~,3f" eye f
+                     (float share 1d0))))
+             ;; the camera poses show the box partly hidden, not only wholly seen
+             (is (some (lambda (s) (< 0.1 s 0.9)) expected) "shares seen: ~s" expected))
+        (destroy-world alone)))))
+
 (test ik-round-trip
   (with-world (w)
     (let* ((r (add-urdf w *arm-urdf*))

@@ -14,6 +14,18 @@ namespace cn {
 static std::atomic<uint64_t> g_mesh_ids{1};
 RenderMesh::RenderMesh() : id(g_mesh_ids++) {}
 RenderMesh::~RenderMesh() { forget_render_mesh(id); }
+void RenderMesh::bounds(btVector3 &lo, btVector3 &hi) const {
+  std::call_once(bounds_once_, [this] {
+    for (size_t i = 0; i + 2 < pos.size(); i += 3) {
+      btVector3 p(pos[i], pos[i + 1], pos[i + 2]);
+      if (i == 0) lo_ = hi_ = p;
+      lo_.setMin(p);
+      hi_.setMax(p);
+    }
+  });
+  lo = lo_;
+  hi = hi_;
+}
 
 double shape_margin() { return 0.001; }
 

@@ -132,6 +132,12 @@ struct RenderMesh {
   std::vector<float> nrm;       // 9 per triangle
   RenderMesh();
   ~RenderMesh();                // its display list goes with it (forget_render_mesh)
+  // the bounding box of its vertices, computed at the first call (once, from any thread)
+  void bounds(btVector3 &lo, btVector3 &hi) const;
+
+ private:
+  mutable std::once_flag bounds_once_;
+  mutable btVector3 lo_{0, 0, 0}, hi_{0, 0, 0};
 };
 void forget_render_mesh(uint64_t id);  // cn_render.cpp
 using RenderMeshP = std::shared_ptr<const RenderMesh>;
@@ -143,6 +149,21 @@ struct RenderItem {
   float rgba[4] = {0.5f, 0.5f, 0.5f, 1.0f};
   bool has_color = false;       // colour from the model (URDF material)
 };
+
+// A pinhole camera (cn_render.cpp): its pose world <- camera in its convention
+// (CN_CAMERA_OPTICAL: z forward, y down; CN_CAMERA_FORWARD: x forward, z up), vertical field of
+// view in degrees, near and far planes (m), image size (pixels).
+struct Camera {
+  btTransform pose;
+  int convention;
+  double fov, near_m, far_m;
+  int w, h;
+};
+// The camera of the arguments, checked (CN_E_ARG naming what is wrong).
+Camera read_camera(const double *cam7, int convention, double fov, int w, int h, double n, double f);
+btTransform gl_camera(const Camera &cam);  // world <- camera in OpenGL's frame (-z forward, y up)
+// The camera pose at EYE looking at TARGET with UP roughly up, in CONVENTION.
+btTransform look_at_tf(const btVector3 &eye, const btVector3 &target, btVector3 up, int convention);
 
 // unit primitives for drawing
 RenderMeshP unit_box();         // [-0.5, 0.5]^3

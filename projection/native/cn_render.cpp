@@ -1,4 +1,5 @@
-// Headless rendering with OSMesa: colour, depth and segmentation images, PNG, visibility.
+// Headless rendering with OSMesa: colour, depth and segmentation images, PNG (the visibility
+// queries draw their own small segmentation images: cn_visibility.cpp).
 #include "cn_internal.hpp"
 
 #include <GL/gl.h>
@@ -15,9 +16,9 @@ namespace cn {
 namespace {
 
 // llvmpipe (Mesa's software rasterizer behind OSMesa) hands every render to worker threads and
-// waits for them at a barrier. The renders here are small (a visibility query draws three
-// frames, the second only inside the target's rectangle): waking the workers and waiting for
-// them cost more than rasterizing in the calling thread, which gives the same pixels. Set when
+// waits for them at a barrier. The renders here are small (a robot camera's picture): waking
+// the workers and waiting for them cost more than rasterizing in the calling thread, which
+// gives the same pixels. Set when
 // the library is loaded, before the first context; a user's own LP_NUM_THREADS is kept.
 __attribute__((constructor)) void rasterize_in_calling_thread() {
   setenv("LP_NUM_THREADS", "0", 0);
@@ -28,7 +29,6 @@ struct GLContext {
   std::vector<unsigned char> buf;
   int w = 0, h = 0;
   std::unordered_map<uint64_t, GLuint> lists;
-  std::unordered_map<uint64_t, std::pair<btVector3, btVector3>> bounds;
   ~GLContext() {
     if (ctx) OSMesaDestroyContext(ctx);
   }
@@ -59,7 +59,6 @@ void delete_dead_lists(GLContext &c) {
       glDeleteLists(it->second, 1);
       c.lists.erase(it);
     }
-    c.bounds.erase(id);
   }
 }
 
@@ -107,33 +106,6 @@ GLuint mesh_list(GLContext &c, const RenderMesh &m) {
   return l;
 }
 
-const std::pair<btVector3, btVector3> &mesh_bounds(GLContext &c, const RenderMesh &m) {
-  auto it = c.bounds.find(m.id);
-  if (it != c.bounds.end()) return it->second;
-  btVector3 lo(0, 0, 0), hi(0, 0, 0);
-  for (size_t i = 0; i + 2 < m.pos.size(); i += 3) {
-    btVector3 p(m.pos[i], m.pos[i + 1], m.pos[i + 2]);
-    if (i == 0) lo = hi = p;
-    lo.setMin(p);
-    hi.setMax(p);
-  }
-  return c.bounds[m.id] = {lo, hi};
-}
-
-struct Camera {
-  btTransform pose;   // world <- camera (convention frame)
-  int convention;
-  double fov, near_m, far_m;
-  int w, h;
-};
-
-btTransform gl_camera(const Camera &cam) {
-  btMatrix3x3 c;
-  if (cam.convention == CN_CAMERA_OPTICAL) c.setValue(1, 0, 0, 0, -1, 0, 0, 0, -1);
-  else c.setValue(0, 0, -1, -1, 0, 0, 0, 1, 0);
-  return cam.pose * btTransform(c, btVector3(0, 0, 0));
-}
-
 void setup_camera(const Camera &cam) {
   glViewport(0, 0, cam.w, cam.h);
   glMatrixMode(GL_PROJECTION);
@@ -149,54 +121,9 @@ void setup_camera(const Camera &cam) {
 
 enum Mode { COLOR, SEG };
 
-// draws object o (link -1: all) ; returns nothing
-// Screen rectangle outside which nothing needs drawing (the visibility query's scene render
-// only looks at the target's pixels): items whose bounding box projects outside it are skipped.
-struct Cull {
-  bool on = false;
-  btTransform view;              // camera (GL convention) <- world
-  double near_m = 0, right = 0, top = 0;
-  int w = 0, h = 0;
-  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // pixel rectangle, inclusive
-  double far_m = INFINITY;  // depth beyond which nothing can cover the target's pixels
-};
-Cull g_cull;
-
-// local bounds of a mesh (its vertices), computed once per mesh
-const std::pair<btVector3, btVector3> &mesh_bounds(GLContext &c, const RenderMesh &m);
-
-bool culled(GLContext &c, const RenderItem &it, const btTransform &frame) {
-  if (!g_cull.on) return false;
-  const auto &b = mesh_bounds(c, *it.mesh);
-  const btTransform t = g_cull.view * frame * it.local;
-  double px0 = 1e300, py0 = 1e300, px1 = -1e300, py1 = -1e300, nearest = INFINITY;
-  int behind = 0;
-  for (int k = 0; k < 8; ++k) {
-    btVector3 corner((k & 1 ? b.second : b.first).x() * it.scale.x(),
-                     (k & 2 ? b.second : b.first).y() * it.scale.y(),
-                     (k & 4 ? b.second : b.first).z() * it.scale.z());
-    btVector3 pc = t * corner;
-    nearest = std::min(nearest, -pc.z());
-    if (pc.z() > -g_cull.near_m) {  // behind the near plane: no pixel from this corner
-      ++behind;
-      continue;
-    }
-    double x = (pc.x() * g_cull.near_m / -pc.z() / g_cull.right + 1) * 0.5 * g_cull.w;
-    double y = (pc.y() * g_cull.near_m / -pc.z() / g_cull.top + 1) * 0.5 * g_cull.h;
-    px0 = std::min(px0, x); px1 = std::max(px1, x);
-    py0 = std::min(py0, y); py1 = std::max(py1, y);
-  }
-  if (behind == 8) return true;   // wholly behind the near plane: nothing of it is drawn
-  // wholly behind the target's farthest point: it loses every depth test against the target
-  if (nearest > g_cull.far_m) return true;
-  if (behind > 0) return false;   // reaches across the near plane: draw it
-  return px1 < g_cull.x0 - 1 || px0 > g_cull.x1 + 2 || py1 < g_cull.y0 - 1 || py0 > g_cull.y1 + 2;
-}
-
 void draw_items(GLContext &c, const std::vector<RenderItem> &items, const btTransform &frame,
                 Mode mode, const float *override_rgba) {
   for (const RenderItem &it : items) {
-    if (culled(c, it, frame)) continue;
     if (mode == COLOR) {
       const float *col = override_rgba ? override_rgba : it.rgba;
       glColor4f(col[0], col[1], col[2], 1.0f);
@@ -217,24 +144,10 @@ void seg_color(int obj, int link) {
 }
 
 // only_obj >= 0: draw only that object (only_link >= 0: only that link)
-// Object whose parts below a height are not drawn (cn_visibility_above), or -1.
-struct ClipBelow {
-  int obj = -1;
-  double z = 0.0;
-};
-ClipBelow g_clip;
-
 void draw_world(GLContext &c, World &w, Mode mode, int only_obj, int only_link) {
   static const float grey[4] = {0.5f, 0.5f, 0.5f, 1.0f};
   for (Object *o : w.objects) {
     if (!o || (only_obj >= 0 && o->id != only_obj)) continue;
-    // the modelview matrix holds the camera here, so the plane is given in world coordinates
-    const bool clip = o->id == g_clip.obj;
-    if (clip) {
-      const GLdouble plane[4] = {0.0, 0.0, 1.0, -g_clip.z};
-      glClipPlane(GL_CLIP_PLANE0, plane);
-      glEnable(GL_CLIP_PLANE0);
-    }
     if (o->kind == CN_BODY) {
       if (mode == SEG) seg_color(o->id, -1);
       draw_items(c, o->shape->draw, o->rb->getWorldTransform(), mode, o->rgba);
@@ -249,7 +162,6 @@ void draw_world(GLContext &c, World &w, Mode mode, int only_obj, int only_link) 
         draw_items(c, m.links[l].visual, o->link_pose[l], mode, ov ? ov : (any_color ? nullptr : grey));
       }
     }
-    if (clip) glDisable(GL_CLIP_PLANE0);
   }
 }
 
@@ -290,26 +202,6 @@ void set_light() {
   glLightfv(GL_LIGHT0, GL_POSITION, dir);
 }
 
-Camera read_camera(const double *cam7, int convention, double fov, int w, int h, double n, double f) {
-  Camera c;
-  c.pose = read_pose(cam7, "camera pose");
-  if (convention != CN_CAMERA_OPTICAL && convention != CN_CAMERA_FORWARD)
-    fail(CN_E_ARG, "camera convention %d, expected 0 (optical) or 1 (x forward)", convention);
-  c.convention = convention;
-  if (!std::isfinite(fov) || fov <= 0 || fov >= 180)
-    fail(CN_E_ARG, "field of view %s degrees, expected 0 < fov < 180", num(fov).c_str());
-  if (w <= 0 || h <= 0 || w > 8192 || h > 8192)
-    fail(CN_E_ARG, "image size %dx%d, expected 1..8192 each", w, h);
-  check_positive(n, "near plane");
-  check_positive(f, "far plane");
-  if (f <= n) fail(CN_E_ARG, "far plane %g is not beyond near plane %g", f, n);
-  c.fov = fov;
-  c.w = w;
-  c.h = h;
-  c.near_m = n;
-  c.far_m = f;
-  return c;
-}
 
 inline void decode_seg(const unsigned char *px, int &obj, int &link) {
   obj = (int)(px[0] | (px[1] << 8)) - 1;
@@ -389,6 +281,37 @@ void render_impl(World &w, const Camera &cam, unsigned char *rgb, double *depth,
   }
 }
 
+
+}  // namespace
+
+btTransform gl_camera(const Camera &cam) {
+  btMatrix3x3 c;
+  if (cam.convention == CN_CAMERA_OPTICAL) c.setValue(1, 0, 0, 0, -1, 0, 0, 0, -1);
+  else c.setValue(0, 0, -1, -1, 0, 0, 0, 1, 0);
+  return cam.pose * btTransform(c, btVector3(0, 0, 0));
+}
+
+Camera read_camera(const double *cam7, int convention, double fov, int w, int h, double n, double f) {
+  Camera c;
+  c.pose = read_pose(cam7, "camera pose");
+  if (convention != CN_CAMERA_OPTICAL && convention != CN_CAMERA_FORWARD)
+    fail(CN_E_ARG, "camera convention %d, expected 0 (optical) or 1 (x forward)", convention);
+  c.convention = convention;
+  if (!std::isfinite(fov) || fov <= 0 || fov >= 180)
+    fail(CN_E_ARG, "field of view %s degrees, expected 0 < fov < 180", num(fov).c_str());
+  if (w <= 0 || h <= 0 || w > 8192 || h > 8192)
+    fail(CN_E_ARG, "image size %dx%d, expected 1..8192 each", w, h);
+  check_positive(n, "near plane");
+  check_positive(f, "far plane");
+  if (f <= n) fail(CN_E_ARG, "far plane %g is not beyond near plane %g", f, n);
+  c.fov = fov;
+  c.w = w;
+  c.h = h;
+  c.near_m = n;
+  c.far_m = f;
+  return c;
+}
+
 btTransform look_at_tf(const btVector3 &eye, const btVector3 &target, btVector3 up, int convention) {
   btVector3 fwd = target - eye;
   if (fwd.length() < 1e-12) fail(CN_E_ARG, "eye and target coincide");
@@ -407,7 +330,6 @@ btTransform look_at_tf(const btVector3 &eye, const btVector3 &target, btVector3 
   return btTransform(m, eye);
 }
 
-}  // namespace
 }  // namespace cn
 
 using namespace cn;
@@ -464,137 +386,6 @@ int cn_look_at(const double *eye, const double *target, const double *up, int co
                           btVector3(up[0], up[1], up[2]), convention),
                out7);
     return 0;
-  });
-}
-
-int cn_visibility(int wh, const double *cam7, int convention, double fov, int width, int height,
-                  int oh, int link, double *out_fraction, int *occ, int cap) {
-  return cn_visibility_above(wh, cam7, convention, fov, width, height, oh, link, -INFINITY,
-                             out_fraction, occ, cap);
-}
-
-int cn_visibility_above(int wh, const double *cam7, int convention, double fov, int width,
-                        int height, int oh, int link, double min_z, double *out_fraction, int *occ,
-                        int cap) {
-  struct ClipScope {  // the clip ends with the call, also when it fails
-    ~ClipScope() {
-      g_clip = ClipBelow();
-      g_cull.on = false;
-    }
-  } clip_scope;
-  return guard([&] {
-    World &w = world(wh);
-    Object &o = w.obj(oh, "target object");
-    if (o.kind == CN_BODY && link != -1) fail(CN_E_HANDLE, "link %d given for body %d, expected -1", link, oh);
-    if (o.kind == CN_ARTICULATED && (link < -1 || link >= (int)o.link_rb.size()))
-      fail(CN_E_HANDLE, "link index %d out of range -1..%d in articulated object %d", link,
-           (int)o.link_rb.size() - 1, oh);
-    check_ptr(out_fraction, "fraction output");
-    check_output(cap, occ, "occluder output");
-    if (std::isnan(min_z) || min_z == INFINITY)
-      fail(CN_E_ARG, "min_z is %g, expected a height in metres or -inf", min_z);
-    Camera cam = read_camera(cam7, convention, fov, width, height, 0.05, 50.0);
-    std::lock_guard<std::recursive_mutex> gl_lock(gl_mutex());
-    GLContext &c = gl_context(width, height);
-    if (std::isfinite(min_z)) {
-      g_clip.obj = oh;
-      g_clip.z = min_z;
-    }
-    const size_t N = (size_t)width * height;
-    auto is_target = [&](const unsigned char *px) {
-      int ob, l;
-      decode_seg(px, ob, l);
-      return ob == oh && (link < 0 || l == link);
-    };
-    // 1. the target alone from the real camera: its pixels and their rectangle
-    begin_frame(SEG);
-    setup_camera(cam);
-    draw_world(c, w, SEG, oh, link);
-    glFinish();
-    std::vector<unsigned char> alone(c.buf.begin(), c.buf.begin() + N * 4);
-    size_t in_view = 0;
-    int x0 = width, y0 = height, x1 = -1, y1 = -1;
-    for (int y = 0; y < height; ++y)
-      for (int x = 0; x < width; ++x)
-        if (is_target(&alone[4 * ((size_t)y * width + x)])) {
-          ++in_view;
-          x0 = std::min(x0, x); x1 = std::max(x1, x);
-          y0 = std::min(y0, y); y1 = std::max(y1, y);
-        }
-    // 2. the whole scene, drawn only where the target is: occluders cover its pixels
-    size_t visible = 0;
-    std::set<int> occluders;
-    if (in_view > 0) {
-      begin_frame(SEG);
-      setup_camera(cam);
-      glEnable(GL_SCISSOR_TEST);
-      glScissor(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
-      g_cull.on = true;
-      g_cull.view = gl_camera(cam).inverse();
-      g_cull.near_m = cam.near_m;
-      g_cull.top = cam.near_m * std::tan(cam.fov * M_PI / 360.0);
-      g_cull.right = g_cull.top * cam.w / cam.h;
-      g_cull.w = cam.w;
-      g_cull.h = cam.h;
-      g_cull.x0 = x0; g_cull.y0 = y0; g_cull.x1 = x1; g_cull.y1 = y1;
-      {  // the target's farthest depth: a corner of its bounding box
-        btVector3 blo, bhi;
-        g_cull.far_m = INFINITY;
-        if (union_aabb(o, link, blo, bhi)) {
-          double far = 0;
-          for (int k = 0; k < 8; ++k) {
-            btVector3 corner(k & 1 ? bhi.x() : blo.x(), k & 2 ? bhi.y() : blo.y(),
-                             k & 4 ? bhi.z() : blo.z());
-            far = std::max(far, -(g_cull.view * corner).z());
-          }
-          g_cull.far_m = far;
-        }
-      }
-      draw_world(c, w, SEG, -1, -1);
-      g_cull.on = false;
-      glDisable(GL_SCISSOR_TEST);
-      glFinish();
-      for (size_t i = 0; i < N; ++i)
-        if (is_target(&alone[4 * i])) {
-          if (is_target(&c.buf[4 * i])) {
-            ++visible;
-          } else {
-            int ob, l;
-            decode_seg(&c.buf[4 * i], ob, l);
-            if (ob >= 0 && ob != oh) occluders.insert(ob);
-          }
-        }
-    }
-    if (in_view == 0) {  // not in the picture at all: nothing of it is visible
-      *out_fraction = 0.0;
-      return 0;
-    }
-    // 3. the target alone with the camera turned towards it
-    btVector3 lo, hi;
-    bool any = union_aabb(o, link, lo, hi);
-    btVector3 center = any ? (lo + hi) * 0.5 : frame_pose(o, link).getOrigin();
-    size_t total = in_view;
-    btVector3 eye = cam.pose.getOrigin();
-    if ((center - eye).length() > 1e-6) {
-      Camera facing = cam;
-      btVector3 up = cam.convention == CN_CAMERA_OPTICAL ? -(cam.pose.getBasis().getColumn(1))
-                                                         : cam.pose.getBasis().getColumn(2);
-      facing.pose = look_at_tf(eye, center, up, cam.convention);
-      begin_frame(SEG);
-      setup_camera(facing);
-      draw_world(c, w, SEG, oh, link);
-      glFinish();
-      total = 0;
-      for (size_t i = 0; i < N; ++i) total += is_target(&c.buf[4 * i]);
-      total = std::max(total, in_view);
-    }
-    *out_fraction = total ? std::min(1.0, (double)visible / (double)total) : 0.0;
-    int n = 0;
-    for (int ob : occluders) {
-      if (n < cap) occ[n] = ob;
-      ++n;
-    }
-    return n;
   });
 }
 
