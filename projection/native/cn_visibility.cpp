@@ -5,9 +5,9 @@
 // camera turned towards it. They are drawn here by a rasterizer of object ids and depths in the
 // calling thread, with OpenGL's conventions (perspective frustum, pixel centres, depth test
 // LESS, back faces culled, a user clip plane): the same pictures as cn_render's segmentation
-// image up to pixels on an edge, without a software GL pipeline, whose per-frame set-up cost
-// each query several times the rasterizing between a plan's other work. No lock: each thread
-// draws into images of its own.
+// image up to pixels on an edge. A software GL pipeline sets up each frame at a cost of several
+// times the rasterizing itself, the more so between a plan's other work, which leaves its
+// caches cold. No lock: each thread draws into images of its own.
 #include "cn_internal.hpp"
 
 #include <algorithm>
