@@ -162,6 +162,8 @@ struct Camera {
 // The camera of the arguments, checked (CN_E_ARG naming what is wrong).
 Camera read_camera(const double *cam7, int convention, double fov, int w, int h, double n, double f);
 btTransform gl_camera(const Camera &cam);  // world <- camera in OpenGL's frame (-z forward, y up)
+// Half the width and half the height (m) of the camera's near plane: its frustum (glFrustum).
+void frustum_half_extents(const Camera &cam, double &right, double &top);
 // The camera pose at EYE looking at TARGET with UP roughly up, in CONVENTION.
 btTransform look_at_tf(const btVector3 &eye, const btVector3 &target, btVector3 up, int convention);
 

@@ -18,8 +18,8 @@ namespace {
 // llvmpipe (Mesa's software rasterizer behind OSMesa) hands every render to worker threads and
 // waits for them at a barrier. The renders here are small (a robot camera's picture): waking
 // the workers and waiting for them cost more than rasterizing in the calling thread, which
-// gives the same pixels. Set when
-// the library is loaded, before the first context; a user's own LP_NUM_THREADS is kept.
+// gives the same pixels. Set when the library is loaded, before the first context; a user's
+// own LP_NUM_THREADS is kept.
 __attribute__((constructor)) void rasterize_in_calling_thread() {
   setenv("LP_NUM_THREADS", "0", 0);
 }
@@ -110,8 +110,8 @@ void setup_camera(const Camera &cam) {
   glViewport(0, 0, cam.w, cam.h);
   glMatrixMode(GL_PROJECTION);
   glLoadIdentity();
-  double top = cam.near_m * std::tan(cam.fov * M_PI / 360.0);
-  double right = top * cam.w / cam.h;
+  double right, top;
+  frustum_half_extents(cam, right, top);
   glFrustum(-right, right, -top, top, cam.near_m, cam.far_m);
   glMatrixMode(GL_MODELVIEW);
   double m[16];
@@ -202,7 +202,6 @@ void set_light() {
   glLightfv(GL_LIGHT0, GL_POSITION, dir);
 }
 
-
 inline void decode_seg(const unsigned char *px, int &obj, int &link) {
   obj = (int)(px[0] | (px[1] << 8)) - 1;
   link = (int)(px[2] | (px[3] << 8)) - 1;
@@ -281,7 +280,6 @@ void render_impl(World &w, const Camera &cam, unsigned char *rgb, double *depth,
   }
 }
 
-
 }  // namespace
 
 btTransform gl_camera(const Camera &cam) {
@@ -289,6 +287,11 @@ btTransform gl_camera(const Camera &cam) {
   if (cam.convention == CN_CAMERA_OPTICAL) c.setValue(1, 0, 0, 0, -1, 0, 0, 0, -1);
   else c.setValue(0, 0, -1, -1, 0, 0, 0, 1, 0);
   return cam.pose * btTransform(c, btVector3(0, 0, 0));
+}
+
+void frustum_half_extents(const Camera &cam, double &right, double &top) {
+  top = cam.near_m * std::tan(cam.fov * M_PI / 360.0);
+  right = top * cam.w / cam.h;
 }
 
 Camera read_camera(const double *cam7, int convention, double fov, int w, int h, double n, double f) {

@@ -76,8 +76,8 @@ struct Raster {
 Raster make_raster(const Camera &cam) {
   Raster r;
   r.view = gl_camera(cam).inverse();
-  const double top = cam.near_m * std::tan(cam.fov * M_PI / 360.0);
-  const double right = top * cam.w / cam.h;
+  double right, top;
+  frustum_half_extents(cam, right, top);
   r.sx = cam.near_m / right;
   r.sy = cam.near_m / top;
   r.a = -(cam.far_m + cam.near_m) / (cam.far_m - cam.near_m);
@@ -322,6 +322,9 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
       *out_fraction = 0.0;
       return 0;
     }
+    // the target's bounding box: its farthest depth (2) and its centre (3)
+    btVector3 lo, hi;
+    const bool any = union_aabb(o, link, lo, hi);
     // 2. the whole scene, drawn only where the target is: occluders cover its pixels
     size_t visible = 0;
     std::set<int> occluders;
@@ -329,12 +332,11 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
       Raster s = r;
       s.x0 = alone.x0; s.y0 = alone.y0; s.x1 = alone.x1; s.y1 = alone.y1;
       s.cull_items = true;
-      btVector3 blo, bhi;  // the target's farthest depth: a corner of its bounding box
-      if (union_aabb(o, link, blo, bhi)) {
+      if (any) {  // a corner of the box is the farthest point
         double far = 0;
         for (int k = 0; k < 8; ++k) {
-          btVector3 corner(k & 1 ? bhi.x() : blo.x(), k & 2 ? bhi.y() : blo.y(),
-                           k & 4 ? bhi.z() : blo.z());
+          btVector3 corner(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(),
+                           k & 4 ? hi.z() : lo.z());
           far = std::max(far, -(s.view * corner).z());
         }
         s.far_cut = far;
@@ -350,8 +352,6 @@ int cn_visibility_above(int wh, const double *cam7, int convention, double fov, 
           }
     }
     // 3. the target alone with the camera turned towards it
-    btVector3 lo, hi;
-    bool any = union_aabb(o, link, lo, hi);
     btVector3 center = any ? (lo + hi) * 0.5 : frame_pose(o, link).getOrigin();
     size_t total = in_view;
     btVector3 eye = cam.pose.getOrigin();
