@@ -139,6 +139,11 @@ clear, every ray cast: the verdicts without the early stop."
             (let ((same (equalp (costmap:occupancy-bits (fresh)) (costmap:occupancy-bits (grid)))))
               (is (eq t same) "the closed drawer's grid"))
             (is (eq (grid) (grid)) "a grid asked for again comes from the cache")
+            ;; the drawer's links have moved, the kitchen's other links have not
+            (let* ((record (cdr (first costmap::*link-runs-cache*)))
+                   (moved (count 1 (costmap::link-runs-record-moved record))))
+              (is (< 0 moved (length (btr:link-names kitchen))) "~d of ~d links moved" moved
+                  (length (btr:link-names kitchen))))
             (is (<= (length costmap::*occupancy-cache*) costmap::*occupancy-cache-size*))))))))
 
 (defun cell-by-cell-grid (costmap)

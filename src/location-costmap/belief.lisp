@@ -248,23 +248,43 @@ whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., count
   (apply-runs bits (polygon-runs (array-dimension bits 0) (array-dimension bits 1)
                                  origin-x origin-y resolution corners padding)))
 
+;;; The runs of an environment's links are kept between grids: a link that stands where it
+;;; stood for an earlier grid of the same geometry is not rasterised again. The links that have
+;;; never moved (the furniture's bodies, its shelves and boards) are kept together in one bit
+;;; array, so that a new grid (a drawer opened) costs a copy of it and the runs of the links that
+;;; have moved, not a pass over every link.
+
 (defvar *link-runs-cache* '()
   "The runs of the links of recently rasterised environments (ENVIRONMENT-OCCUPANCY-GRID): a
-list of (key . links), the most recently used first. KEY: the environment object, its URDF and
-the grid's geometry, padding and heights; LINKS: a vector with per link index NIL or (pose .
-runs), the link's map pose (7 doubles) when its runs were found.")
+list of (key . LINK-RUNS-RECORD), the most recently used first. KEY: the environment object, its
+URDF and the grid's geometry, padding and heights.")
+
+(defstruct (link-runs-record (:constructor make-link-runs-record (links moved)))
+  "What *LINK-RUNS-CACHE* keeps of one environment and grid geometry. LINKS: a vector with per
+link index a list of up to *LINK-POSES-KEPT* entries (pose . runs), the most recently used
+first: the link's map pose (7 doubles) and its runs there. MOVED: a bit per link, 1 once the
+link has stood at a second pose. STILL: the cells of the links that have not (their only
+entry's runs), NIL until made again after a link moved."
+  links moved (still nil))
+
+(defparameter *link-poses-kept* 4
+  "How many poses of one link *LINK-RUNS-CACHE* keeps the runs of: a drawer or door that is
+opened and closed again comes back to a pose whose runs are known.")
 
 (defparameter *link-runs-cache-size* 8
   "How many environments and grid geometries *LINK-RUNS-CACHE* keeps (a household run asks for
 two paddings of one kitchen).")
 
 (defun link-runs-entry (key link-count)
-  "The link vector of *LINK-RUNS-CACHE* under KEY (made empty when there is none), moved to the
-front."
+  "The LINK-RUNS-RECORD of *LINK-RUNS-CACHE* under KEY (made empty when there is none), moved to
+the front."
   (let ((entry (recent-entry '*link-runs-cache* key #'equal)))
     (if entry
         (cdr entry)
-        (add-recent-entry '*link-runs-cache* key (make-array link-count :initial-element nil)
+        (add-recent-entry '*link-runs-cache* key
+                          (make-link-runs-record (make-array link-count :initial-element nil)
+                                                 (make-array link-count :element-type 'bit
+                                                                        :initial-element 0))
                           *link-runs-cache-size*))))
 
 (defun same-pose-p (poses index pose)
@@ -295,27 +315,51 @@ link) lies outside Z-MIN .. Z-MAX or is flat."
         (make-array 0 :element-type 'fixnum))))
 
 (defun rasterise-environment (bits env key origin-x origin-y resolution padding z-min z-max)
-  "Mark in BITS the cells the links of ENV occupy (LINK-RUNS); the runs of a link that has not
-moved since the last grid of the same KEY (*LINK-RUNS-CACHE*) are not found again."
+  "Mark in BITS (all 0) the cells the links of ENV occupy (LINK-RUNS). Of *LINK-RUNS-CACHE*'s
+record under KEY: the cells of the links that have never moved are copied at once, and a link
+that stands where it stood for one of the last grids is not rasterised again."
+  (declare (type (simple-array bit (* *)) bits))
   (let* ((handle (btr:object-handle env))
          (world (btr::whandle env))
          (poses (cram-native:robot-link-poses world handle))
-         (names (btr:link-names env))
-         (links (link-runs-entry key (length names)))
+         (names (coerce (btr:link-names env) 'simple-vector))
+         (record (link-runs-entry key (length names)))
+         (links (link-runs-record-links record))
+         (moved (link-runs-record-moved record))
          (aabbs nil)
          (rows (array-dimension bits 0)) (cols (array-dimension bits 1)))
-    (loop for name in names
-          for i from 0
-          for known = (aref links i)
-          do (apply-runs
-              bits
-              (if (and known (same-pose-p poses i (car known)))
-                  (cdr known)
-                  (let ((runs (link-runs env i name (or aabbs (setf aabbs (btr:link-aabbs env)))
-                                         rows cols origin-x origin-y resolution padding
-                                         (float z-min 1d0) (float z-max 1d0))))
-                    (setf (aref links i) (cons (subseq poses (* 7 i) (* 7 (1+ i))) runs))
-                    runs))))))
+    (declare (type simple-bit-vector moved))
+    (flet ((runs-here (i)
+             ;; the runs of link I where it stands now: kept ones, else found and kept
+             (let* ((entries (aref links i))
+                    (known (find-if (lambda (entry) (same-pose-p poses i (car entry))) entries)))
+               (cond ((and known (eq known (first entries))) (cdr known))
+                     (known (setf (aref links i) (cons known (remove known entries :test #'eq)))
+                            (cdr known))
+                     (t (let ((runs (link-runs env i (svref names i)
+                                               (or aabbs (setf aabbs (btr:link-aabbs env)))
+                                               rows cols origin-x origin-y resolution padding
+                                               (float z-min 1d0) (float z-max 1d0))))
+                          (push (cons (subseq poses (* 7 i) (* 7 (1+ i))) runs) (aref links i))
+                          (when (> (length (aref links i)) *link-poses-kept*)
+                            (setf (aref links i) (subseq (aref links i) 0 *link-poses-kept*)))
+                          runs))))))
+      ;; a link seen before that stands elsewhere now has moved
+      (dotimes (i (length names))
+        (let ((entries (aref links i)))
+          (when (and (zerop (sbit moved i)) entries (not (same-pose-p poses i (car (first entries)))))
+            (setf (sbit moved i) 1
+                  (link-runs-record-still record) nil))))
+      ;; the links that have not moved: their cells made once, then copied
+      (let ((still (link-runs-record-still record)))
+        (unless (and still (equal (array-dimensions still) (array-dimensions bits)))
+          (setf still (make-array (array-dimensions bits) :element-type 'bit :initial-element 0))
+          (dotimes (i (length names))
+            (when (zerop (sbit moved i)) (apply-runs still (runs-here i))))
+          (setf (link-runs-record-still record) still))
+        (replace (sb-ext:array-storage-vector bits) (sb-ext:array-storage-vector still)))
+      (dotimes (i (length names) bits)
+        (when (= 1 (sbit moved i)) (apply-runs bits (runs-here i)))))))
 
 (defun environment-occupancy-grid (&key (world btr:*current-bullet-world*) (padding 0d0)
                                         width height origin-x origin-y resolution
