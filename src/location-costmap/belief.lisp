@@ -48,7 +48,9 @@ SYMBOL, keeping at most SIZE entries. Returns VALUE."
 (defun cell-index (v)
   "FLOOR of the double V, a cell index (far outside a grid's cells is clamped later)."
   (declare (type double-float v))
-  (values (floor (max -1d9 (min 1d9 v)))))
+  (let ((c (max -1d9 (min 1d9 v))))
+    (declare (type (double-float -1d9 1d9) c))
+    (values (floor c))))
 
 (defun apply-runs (bits runs)
   "Mark the cells of the runs RUNS (a fixnum vector of row, first and last column triples) in
@@ -77,8 +79,9 @@ them, the cells between are taken without a test."
          (r0 (max 0 (cell-index (/ (- y0 padding origin-y) resolution))))
          (r1 (min (1- rows) (cell-index (/ (- (+ y1 padding) origin-y) resolution))))
          (p2 (* padding padding))
-         (runs '()))
-    (declare (type fixnum c0 c1 r0 r1) (type double-float p2))
+         (runs (make-array (* 3 (max 0 (1+ (- r1 r0)))) :element-type 'fixnum))
+         (k 0))
+    (declare (type fixnum c0 c1 r0 r1 k) (type double-float p2))
     (when (<= c0 c1)
       (loop for r of-type fixnum from r0 to r1
             for y of-type double-float = (+ origin-y (* (+ r 0.5d0) resolution))
@@ -93,7 +96,8 @@ them, the cells between are taken without a test."
                    (declare (inline inside))
                    ;; the run's ends as the cell arithmetic puts them, then moved to where the
                    ;; test itself says (the run is contiguous: the distance grows away from it)
-                   (let* ((reach (sqrt (max 0d0 (- p2 dy2))))
+                   (let* ((left (- p2 dy2))
+                          (reach (if (> left 0d0) (sqrt left) 0d0))
                           (a (max c0 (min (1+ c1) (- (cell-index (- 0.5d0 (/ (- x0 reach origin-x) resolution)))))))
                           (b (min c1 (max (1- c0) (cell-index (- (/ (- (+ x1 reach) origin-x) resolution) 0.5d0))))))
                      (declare (type fixnum a b))
@@ -101,8 +105,10 @@ them, the cells between are taken without a test."
                      (loop while (and (<= a c1) (not (inside a))) do (incf a))
                      (loop while (and (< b c1) (inside (1+ b))) do (incf b))
                      (loop while (and (>= b a) (not (inside b))) do (decf b))
-                     (when (<= a b) (push r runs) (push a runs) (push b runs))))))
-    (coerce (nreverse runs) '(simple-array fixnum (*)))))
+                     (when (<= a b)
+                       (setf (aref runs k) r (aref runs (+ k 1)) a (aref runs (+ k 2)) b)
+                       (incf k 3))))))
+    (if (= k (length runs)) runs (subseq runs 0 k))))
 
 (defun rasterise-box (bits origin-x origin-y resolution x0 y0 x1 y1 padding)
   "Mark the cells of BITS whose centres are within PADDING of the rectangle [X0 X1] x [Y0 Y1]
@@ -195,7 +201,9 @@ past the edges). For a link along the map's axes, its box in the map, as before.
 
 (defun polygon-runs (rows cols origin-x origin-y resolution corners padding)
   "The runs (as BOX-RUNS) of the cells of a grid of ROWS x COLS cells (cell (0 0) at ORIGIN)
-whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., counter-clockwise)."
+whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., counter-clockwise).
+The cells near a convex polygon form one run in each row: its ends are found by testing cells
+from the ends of the row inwards, the cells between are taken without a test."
   (declare (type fixnum rows cols) (type double-float origin-x origin-y resolution padding))
   (let* ((n (length corners))
          (ax (make-array n :element-type 'double-float))
@@ -209,17 +217,21 @@ whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., count
          (r0 (max 0 (cell-index (/ (- (reduce #'min ys) padding origin-y) resolution))))
          (r1 (min (1- rows) (cell-index (/ (- (+ (reduce #'max ys) padding) origin-y) resolution))))
          (p2 (* padding padding))
-         (runs '()))
+         (runs (make-array (* 3 (max 0 (1+ (- r1 r0)))) :element-type 'fixnum))
+         (k 0))
+    (declare (type (simple-array double-float (*)) ax ay ex ey) (type fixnum n c0 c1 r0 r1 k)
+             (type double-float p2))
     (loop for (a . rest) on corners
           for b = (or (first rest) (first corners))
           for i from 0
           do (setf (aref ax i) (float (first a) 1d0) (aref ay i) (float (second a) 1d0)
                    (aref ex i) (- (float (first b) 1d0) (aref ax i))
                    (aref ey i) (- (float (second b) 1d0) (aref ay i))))
-    (flet ((near-p (x y)
-             (declare (type double-float x y) (optimize speed))
-             (let ((inside t) (best most-positive-double-float))
-               (declare (type double-float best))
+    (flet ((near-p (c y)
+             (declare (type fixnum c) (type double-float y) (optimize speed))
+             (let ((x (+ origin-x (* (+ c 0.5d0) resolution)))
+                   (inside t) (best most-positive-double-float))
+               (declare (type double-float x best))
                (dotimes (i n (or inside (<= best p2)))
                  (let* ((dx (- x (aref ax i))) (dy (- y (aref ay i)))
                         (vx (aref ex i)) (vy (aref ey i))
@@ -229,17 +241,16 @@ whose centres are within PADDING of the convex polygon CORNERS ((x y) ..., count
                         (qx (- dx (* k vx))) (qy (- dy (* k vy))))
                    (when (< (- (* vx dy) (* vy dx)) 0d0) (setf inside nil))
                    (setf best (min best (+ (* qx qx) (* qy qy)))))))))
-      (loop for r from r0 to r1
-            for y double-float = (+ origin-y (* (+ r 0.5d0) resolution))
-            do (let ((start nil))
-                 (loop for c from c0 to (1+ c1)
-                       for near = (and (<= c c1)
-                                       (near-p (+ origin-x (* (+ c 0.5d0) resolution)) y))
-                       do (cond ((and near (null start)) (setf start c))
-                                ((and (not near) start)
-                                 (push r runs) (push start runs) (push (1- c) runs)
-                                 (setf start nil)))))))
-    (coerce (nreverse runs) '(simple-array fixnum (*)))))
+      (loop for r of-type fixnum from r0 to r1
+            for y of-type double-float = (+ origin-y (* (+ r 0.5d0) resolution))
+            do (let ((a c0) (b c1))
+                 (declare (type fixnum a b))
+                 (loop while (and (<= a c1) (not (near-p a y))) do (incf a))
+                 (when (<= a c1)
+                   (loop while (and (> b a) (not (near-p b y))) do (decf b))
+                   (setf (aref runs k) r (aref runs (+ k 1)) a (aref runs (+ k 2)) b)
+                   (incf k 3)))))
+    (if (= k (length runs)) runs (subseq runs 0 k))))
 
 (defun rasterise-polygon (bits origin-x origin-y resolution corners padding)
   "Mark the cells of BITS whose centres are within PADDING of the convex polygon CORNERS
