@@ -146,6 +146,27 @@ clear, every ray cast: the verdicts without the early stop."
                   (length (btr:link-names kitchen))))
             (is (<= (length costmap::*occupancy-cache*) costmap::*occupancy-cache-size*))))))))
 
+(test rasterising-an-environment-keeps-the-cells-marked-before
+  ;; a world with two environments rasterises both into one grid: the second adds its cells
+  (in-kitchen
+    (let* ((kitchen (btr:object btr:*current-bullet-world* :iai-kitchen))
+           (costmap::*link-runs-cache* '())
+           (fresh (costmap:environment-occupancy-grid :padding 0.1))
+           (bits (make-array (array-dimensions (costmap:occupancy-bits fresh))
+                             :element-type 'bit :initial-element 0))
+           (free (loop for i below (array-total-size bits)
+                       when (zerop (row-major-aref (costmap:occupancy-bits fresh) i)) return i)))
+      (is (not (null free)) "the kitchen's grid has a free cell")
+      (when free
+        (setf (row-major-aref bits free) 1)
+        (costmap::rasterise-environment
+         bits kitchen (list 'other-grid (btr:urdf kitchen))
+         (costmap::origin-x fresh) (costmap::origin-y fresh) (costmap::resolution fresh) 0.1d0
+         costmap::*occupancy-z-min* costmap::*occupancy-z-max*)
+        (is (= 1 (row-major-aref bits free)) "the cell marked before is still marked")
+        (setf (row-major-aref bits free) 0)
+        (is (equalp bits (costmap:occupancy-bits fresh)) "and the kitchen's cells are its grid's")))))
+
 (defun cell-by-cell-grid (costmap)
   "COSTMAP's grid computed the plain way: in the cells of its region, the product of its cost
 functions called at each centre, in the order they are applied, a cell that is 0 left alone."

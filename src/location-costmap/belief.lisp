@@ -326,9 +326,10 @@ link) lies outside Z-MIN .. Z-MAX or is flat."
         (make-array 0 :element-type 'fixnum))))
 
 (defun rasterise-environment (bits env key origin-x origin-y resolution padding z-min z-max)
-  "Mark in BITS (all 0) the cells the links of ENV occupy (LINK-RUNS). Of *LINK-RUNS-CACHE*'s
-record under KEY: the cells of the links that have never moved are copied at once, and a link
-that stands where it stood for one of the last grids is not rasterised again."
+  "Mark in BITS the cells the links of ENV occupy (LINK-RUNS). Of *LINK-RUNS-CACHE*'s record
+under KEY: the cells of the links that have never moved are marked at once (one bit array kept
+for them), and a link that stands where it stood for one of the last grids is not rasterised
+again."
   (declare (type (simple-array bit (* *)) bits))
   (let* ((handle (btr:object-handle env))
          (world (btr::whandle env))
@@ -368,7 +369,7 @@ that stands where it stood for one of the last grids is not rasterised again."
           (dotimes (i (length names))
             (when (zerop (sbit moved i)) (apply-runs still (runs-here i))))
           (setf (link-runs-record-still record) still))
-        (replace (sb-ext:array-storage-vector bits) (sb-ext:array-storage-vector still)))
+        (bit-ior bits still bits))
       (dotimes (i (length names) bits)
         (when (= 1 (sbit moved i)) (apply-runs bits (runs-here i)))))))
 
