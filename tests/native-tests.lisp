@@ -293,6 +293,34 @@ world as it was."
       (signals-naming ("link index 99") (robot-link-poses-if w r (list j1) '(0.1) '(99)))
       (signals-naming ("j1" "NaN") (robot-link-poses-if w r (list j1) (list (nan)) links)))))
 
+(test link-poses-after-many-moves-are-those-of-a-robot-placed-there-at-once
+  "However a robot got to its base pose and joint values (base moves, some joints set, values
+set again that it had before, -0 and 0), its link poses are digit for digit those of a new robot
+of the same model given that base pose and those values at once."
+  (with-world (w)
+    (let* ((pose '(1 2 0 0 0 0.3 0.95))
+           (r (add-urdf w *arm-urdf* :pose pose))
+           (n (length (robot-joints w r)))
+           (all (loop for j below n collect j))
+           (state (sb-ext:seed-random-state 11))
+           (differing 0))
+      (dotimes (i 300)
+        (case (random 3 state)
+          (0 (let ((half-turn (random 1d0 state)))
+               (setf pose (list (random 2d0 state) (random 2d0 state) 0 0 0
+                                (sin half-turn) (cos half-turn)))
+               (set-object-pose w r pose)))
+          (1 (let ((j (random n state)))
+               (set-robot-joints w r (list j) (list (nth (random 4 state) '(0.4d0 -0.7d0 0d0 -0d0))))))
+          (t (set-robot-joints w r all (loop repeat n collect (- (random 2d0 state) 1d0)))))
+        ;; the new robot is given the same base pose as the robot's last (as it was written)
+        (let ((fresh (add-urdf w *arm-urdf* :pose pose)))
+          (set-robot-joints w fresh all (coerce (robot-joints w r) 'list))
+          (unless (equalp (robot-link-poses w r) (robot-link-poses w fresh))
+            (incf differing))
+          (remove-object w fresh)))
+      (is (= 0 differing) "~d of 300 states differ from a fresh robot's" differing))))
+
 (test urdf-with-moved-joint-origins
   ;; the object of a URDF with some joints' <origin> attributes changed, made from the model of
   ;; the original text: the link poses of the edited text, bit for bit, in any joint state

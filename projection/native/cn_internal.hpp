@@ -251,6 +251,10 @@ struct Object {
   std::vector<btRigidBody *> link_rb;           // null for links without collision
   std::vector<std::array<float, 4>> link_rgba;  // override colour (a < 0: model colours)
   bool self_collision = false;
+  // the rotation of each revolute joint at the value it was last computed for (the value's
+  // bits in joint_rot_bits), kept by robot_fk so that links are placed again without it
+  std::vector<btMatrix3x3> joint_rot;
+  std::vector<uint64_t> joint_rot_bits;
   // the sweep checks' view of its links (cn_sweep.cpp), made for its link shapes: kept here
   // once checked against them (null: not yet)
   std::shared_ptr<const void> sweep_links;
@@ -301,7 +305,33 @@ void forget_stale_aabbs(World &w);  // after updateAabbs(), which has done every
 void set_object_pose(World &w, Object &o, const btTransform &t);
 btTransform object_pose(const Object &o);
 btTransform frame_pose(const Object &o, int link);   // link pose or body pose
+// The value of joint J of model M for the joint values Q (a mimic joint follows its joint).
+inline double joint_value(const Model &m, const std::vector<double> &q, int j) {
+  const JointM &jm = m.joints[j];
+  return jm.mimic >= 0 ? jm.mult * q[jm.mimic] + jm.offset : q[j];
+}
+
+// The pose of joint JM's child link, its parent link at PARENT and the joint at value V.
+inline btTransform child_pose(const JointM &jm, const btTransform &parent, double v) {
+  btTransform t = parent * jm.origin;
+  switch (jm.type) {
+    case CN_JOINT_REVOLUTE:
+    case CN_JOINT_CONTINUOUS:
+      t.setBasis(t.getBasis() * btMatrix3x3(btQuaternion(jm.axis, v)));
+      break;
+    case CN_JOINT_PRISMATIC:
+      t.setOrigin(t * (jm.axis * v));
+      break;
+    default:
+      break;
+  }
+  return t;
+}
+
 void robot_fk(World &w, Object &o);
+// After O's joint values changed from OLD_Q (its base kept): ROBOT_FK of the links a changed
+// joint moves.
+void robot_fk_changed(World &w, Object &o, const std::vector<double> &old_q);
 void compute_link_poses(const Object &o, std::vector<btTransform> &out);
 // Link poses of model M for the base pose BASE and joint values Q (mimic joints follow); with
 // NEEDED, only the links marked there (every ancestor of a marked link must be marked too).
