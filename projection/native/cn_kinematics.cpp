@@ -15,15 +15,25 @@ void compute_link_poses(const Object &o, std::vector<btTransform> &out) {
   compute_link_poses(*o.model, o.base, o.q, out);
 }
 
-void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
-                        std::vector<btTransform> &out, const std::vector<char> *needed) {
+// Every link pose of model M (those NEEDED, when given) into OUT, from BASE down the joints in
+// model order, each child placed by POSE(joint index, parent pose, joint value).
+template <class Pose>
+static void place_links(const Model &m, const btTransform &base, const std::vector<double> &q,
+                        std::vector<btTransform> &out, const std::vector<char> *needed, Pose pose) {
   out.resize(m.links.size());
   out[m.root] = base;
   for (size_t j = 0; j < m.joints.size(); ++j) {
     const JointM &jm = m.joints[j];
     if (needed && !(*needed)[jm.child]) continue;
-    out[jm.child] = child_pose(jm, out[jm.parent], joint_value(m, q, (int)j));
+    out[jm.child] = pose((int)j, out[jm.parent], joint_value(m, q, (int)j));
   }
+}
+
+void compute_link_poses(const Model &m, const btTransform &base, const std::vector<double> &q,
+                        std::vector<btTransform> &out, const std::vector<char> *needed) {
+  place_links(m, base, q, out, needed, [&m](int j, const btTransform &parent, double v) {
+    return child_pose(m.joints[j], parent, v);
+  });
 }
 
 void compute_link_poses_of(const Model &m, const btTransform &base, const std::vector<double> &q,
@@ -65,13 +75,10 @@ static inline btTransform child_pose_of(Object &o, int j, const btTransform &par
 
 void robot_fk(World &w, Object &o) {
   // COMPUTE_LINK_POSES of O, the joints' rotations kept
-  const Model &m = *o.model;
-  o.link_pose.resize(m.links.size());
-  o.link_pose[m.root] = o.base;
-  for (size_t j = 0; j < m.joints.size(); ++j) {
-    const JointM &jm = m.joints[j];
-    o.link_pose[jm.child] = child_pose_of(o, (int)j, o.link_pose[jm.parent], joint_value(m, o.q, (int)j));
-  }
+  place_links(*o.model, o.base, o.q, o.link_pose, nullptr,
+              [&o](int j, const btTransform &parent, double v) {
+                return child_pose_of(o, j, parent, v);
+              });
   for (size_t i = 0; i < o.link_rb.size(); ++i)
     if (o.link_rb[i]) teleport_rb(w, o.link_rb[i], o.link_pose[i]);
 }

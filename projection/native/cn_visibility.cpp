@@ -195,9 +195,20 @@ inline WinVertex to_window(const ClipVertex &c, int w, int h) {
   return {(c.x * iw + 1) * 0.5 * w, (c.y * iw + 1) * 0.5 * h, c.z * iw};
 }
 
-// Draw the items (world <- frame) of (obj, link) into IMG.
-void draw_items(SegImage &img, const Raster &r, const std::vector<RenderItem> &items,
-                const btTransform &frame, int obj, int link) {
+// The raster's rectangle in normalised device coordinates, widened by a pixel: x left, x right,
+// y bottom, y top.
+struct NdcRect {
+  double xl, xr, yl, yr;
+};
+
+NdcRect ndc_rect(const Raster &r, int w, int h) {
+  return {2.0 * (r.x0 - 1) / w - 1, 2.0 * (r.x1 + 2) / w - 1, 2.0 * (r.y0 - 1) / h - 1,
+          2.0 * (r.y1 + 2) / h - 1};
+}
+
+// Draw the items (world <- frame) of (obj, link) into IMG, the raster's rectangle being NDC.
+void draw_items(SegImage &img, const Raster &r, const NdcRect &ndc,
+                const std::vector<RenderItem> &items, const btTransform &frame, int obj, int link) {
   const bool clip = obj == r.clip_obj;
   for (const RenderItem &it : items) {
     const btTransform t = frame * it.local;
@@ -219,9 +230,7 @@ void draw_items(SegImage &img, const Raster &r, const std::vector<RenderItem> &i
     }
     for (int col = 0; col < 3; ++col) m[4][col] = t.getBasis()[2][col] * scale[col];
     m[4][3] = t.getOrigin().z() - r.clip_z;
-    // the drawn rectangle in normalised device coordinates, widened by a pixel
-    const double xl = 2.0 * (r.x0 - 1) / img.w - 1, xr = 2.0 * (r.x1 + 2) / img.w - 1;
-    const double yl = 2.0 * (r.y0 - 1) / img.h - 1, yr = 2.0 * (r.y1 + 2) / img.h - 1;
+    const double xl = ndc.xl, xr = ndc.xr, yl = ndc.yl, yr = ndc.yr;
     const std::vector<float> &p = it.mesh->pos;
     for (size_t i = 0; i + 8 < p.size(); i += 9) {
       ClipVertex v[3];
@@ -264,15 +273,16 @@ void draw_items(SegImage &img, const Raster &r, const std::vector<RenderItem> &i
 
 // Draw the world's objects (only_obj >= 0: that one, only_link >= 0: that link of it).
 void draw_world(SegImage &img, const Raster &r, World &w, int only_obj, int only_link) {
+  const NdcRect ndc = ndc_rect(r, img.w, img.h);
   for (Object *o : w.objects) {
     if (!o || (only_obj >= 0 && o->id != only_obj)) continue;
     if (o->kind == CN_BODY) {
-      if (o->shape) draw_items(img, r, o->shape->draw, o->rb->getWorldTransform(), o->id, -1);
+      if (o->shape) draw_items(img, r, ndc, o->shape->draw, o->rb->getWorldTransform(), o->id, -1);
     } else {
       const Model &m = *o->model;
       for (size_t l = 0; l < m.links.size(); ++l) {
         if (only_link >= 0 && (int)l != only_link) continue;
-        draw_items(img, r, m.links[l].visual, o->link_pose[l], o->id, (int)l);
+        draw_items(img, r, ndc, m.links[l].visual, o->link_pose[l], o->id, (int)l);
       }
     }
   }
