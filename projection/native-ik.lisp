@@ -11,6 +11,7 @@
 (defcn "cn_chain_may_reach" :int (c :int) (position :pointer) (pos-tol :double))
 (defcn "cn_chain_reach_map_get" :int (c :int) (params :pointer) (cells :pointer) (cap :int))
 (defcn "cn_chain_reach_map_set" :int (c :int) (params :pointer) (cells :pointer) (n :int))
+(defcn "cn_chain_ik_memo_size" :int (c :int))
 (defcn "cn_chain_ik" :int (c :int) (target :pointer) (seed :pointer) (restarts :int)
   (pos-tol :double) (rot-tol :double) (rng :unsigned-int) (out :pointer) (err :pointer))
 
@@ -59,6 +60,13 @@ tolerance above 2 mm: always)."
     (with-vector-pointers ((pp p))
       (= 1 (ccall "cn_chain_may_reach" chain pp
                   (real-arg position-tolerance 'chain-may-reach-p "position tolerance"))))))
+
+(defun chain-ik-memo-size (chain)
+  "How many answers of CHAIN-IK the native CHAIN keeps to give again: those its random restarts
+play no part in (a goal out of the reach map's reach, a goal solved from the seed), for the same
+goal, seed, restart count and tolerances bit for bit. At most 4096: the memo is emptied when
+full."
+  (ccall "cn_chain_ik_memo_size" chain))
 
 (defconstant +reach-map-params+ 20 "The numbers of a reach map besides its cells (CN_REACH_PARAMS).")
 

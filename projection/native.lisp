@@ -32,7 +32,7 @@
    #:render #:render-png #:write-png #:look-at #:visibility
    ;; inverse kinematics
    #:make-chain #:destroy-chain #:chain-joint-count #:chain-joints #:chain-limits #:chain-fk
-   #:chain-ik #:chain-may-reach-p
+   #:chain-ik #:chain-ik-memo-size #:chain-may-reach-p
    #:chain-reach-map #:set-chain-reach-map))
 
 (in-package :cram-native)

@@ -101,3 +101,37 @@ a list of problems (answers off the target, outside the limits, or with wrong re
             (check-chain-round-trips w r "base_link" 8 5)
             ;; elbow -> tool frame: 3 joints, still exact on poses it can reach
             (check-chain-round-trips w r "r_elbow_flex_link" 3 6))))))
+
+(test ik-memo-keeps-only-answers-the-restarts-play-no-part-in
+  ;; a chain asked again gives what a chain asked for the first time gives, bit for bit, for
+  ;; goals solved from the seed, goals out of reach and goals only a restart solves (whose
+  ;; answer depends on the random seed: not kept)
+  (if (not (probe-file *ik-pr2-urdf*))
+      (skip "no PR2 model at ~a" *ik-pr2-urdf*)
+      (with-world (w)
+        (let* ((r (add-urdf w (uiop:read-file-string *ik-pr2-urdf*)))
+               (c (make-chain w r "torso_lift_link" "r_wrist_roll_link"))
+               (fresh (make-chain w r "torso_lift_link" "r_wrist_roll_link"))
+               (state (sb-ext:seed-random-state 21)) (restart-dependent 0))
+          (unwind-protect
+               (multiple-value-bind (lo hi) (chain-limits c)
+                 (dotimes (k 40)
+                   (let* ((q0 (random-q lo hi state))
+                          (target (if (zerop (mod k 4)) '(2 0 0 0 0 0 1) (chain-fk c q0)))
+                          ;; every other goal seeded where it is solved, the others far away
+                          (seed (if (evenp k) q0 (random-q lo hi state))))
+                     (chain-ik c target :seed seed :random-seed 1)
+                     (multiple-value-bind (q err) (chain-ik c target :seed seed :random-seed 2)
+                       (multiple-value-bind (q2 err2) (chain-ik fresh target :seed seed :random-seed 2)
+                         (is (equalp (list q err) (list q2 err2)) "goal ~d: asked again ~s ~s, fresh ~s ~s"
+                             k q err q2 err2))
+                       (unless (equalp q (chain-ik fresh target :seed seed :random-seed 1))
+                         (incf restart-dependent)))))
+                 (is (plusp restart-dependent) "no goal's answer depended on the random seed")
+                 (is (< 0 (chain-ik-memo-size c) 40))
+                 ;; never more than 4096 answers, however many goals are asked
+                 (loop for k below 5000
+                       do (chain-ik c (list (+ 2 (* k 1d-3)) 0 0 0 0 0 1) :max-restarts 0))
+                 (is (<= 1 (chain-ik-memo-size c) 4096)))
+            (destroy-chain fresh)
+            (destroy-chain c))))))

@@ -11,6 +11,8 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cstring>
+#include <unordered_map>
 
 namespace cn {
 namespace {
@@ -42,6 +44,43 @@ struct KinJoint {
   int p_axis = 3;           // p is zero (-1), along one coordinate axis (0..2), or general (3)
 };
 
+// The answers of cn_chain_ik that its random restarts play no part in: a goal out of the reach
+// map's reach (no attempt is made) and a goal solved from the seed (the first attempt). Kept by
+// the bits of the goal, the seed, the restart count and the tolerances, so that a repeated
+// question (a pre-check's goals asked again when the motion is made) gets the same answer to the
+// last bit without the solver; emptied when it holds kMaxEntries, so that it never grows past
+// that.
+struct IkMemo {
+  static constexpr size_t kMaxEntries = 4096;
+  struct Answer {
+    std::vector<double> q;
+    double err[2];
+    int status;
+  };
+  struct Hash {
+    size_t operator()(const std::vector<uint64_t> &k) const {
+      uint64_t h = 0x9E3779B97F4A7C15ull;
+      for (uint64_t x : k) h = (h ^ x) * 0xBF58476D1CE4E5B9ull, h ^= h >> 31;
+      return (size_t)h;
+    }
+  };
+  std::unordered_map<std::vector<uint64_t>, Answer, Hash> answers;
+  static std::vector<uint64_t> key(const double *target7, const double *seed, size_t n,
+                                   int max_restarts, double pos_tol, double rot_tol) {
+    std::vector<uint64_t> k(7 + n + 3);
+    std::memcpy(k.data(), target7, 7 * sizeof(double));
+    std::memcpy(k.data() + 7, seed, n * sizeof(double));
+    k[7 + n] = (uint64_t)(uint32_t)max_restarts;
+    std::memcpy(&k[8 + n], &pos_tol, sizeof(double));
+    std::memcpy(&k[9 + n], &rot_tol, sizeof(double));
+    return k;
+  }
+  void keep(std::vector<uint64_t> &&k, const double *q, size_t n, const double *err, int status) {
+    if (answers.size() >= kMaxEntries) answers.clear();
+    answers[std::move(k)] = Answer{std::vector<double>(q, q + n), {err[0], err[1]}, status};
+  }
+};
+
 struct Chain {
   ModelP model;
   KDL::Chain chain;
@@ -53,6 +92,7 @@ struct Chain {
   Vec3 tip_p = Vec3::Zero();
   std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
   std::unique_ptr<ReachMap> reach;  // where the tip can be: built at the first IK call
+  IkMemo memo;                      // answers that do not depend on the random restarts
 };
 
 // What the chain's reach map is made of.
@@ -483,6 +523,7 @@ int cn_chain_reach_map_set(int h, const double *params, const unsigned char *cel
     std::unique_ptr<ReachMap> m = ReachMap::restore(reach_joints(c), c.tip_p, params, cells, n);
     if (!m) return 0;
     c.reach = std::move(m);
+    c.memo.answers.clear();  // its verdicts on goals out of reach came from the old map
     return 1;
   });
 }
@@ -513,6 +554,17 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     check_positive(pos_tol, "position tolerance");
     check_positive(rot_tol, "rotation tolerance");
     const size_t n = c.joints.size();
+    std::vector<uint64_t> key = IkMemo::key(target7, seed, n, max_restarts, pos_tol, rot_tol);
+    auto known = c.memo.answers.find(key);
+    if (known != c.memo.answers.end()) {
+      const IkMemo::Answer &a = known->second;
+      std::copy(a.q.begin(), a.q.end(), out_q);
+      if (out_err) {
+        out_err[0] = a.err[0];
+        out_err[1] = a.err[1];
+      }
+      return a.status;
+    }
     IkSolver solver(c, rot_matrix(t), position(t), pos_tol, rot_tol);
     std::vector<double> start(n), best(n);
     for (size_t i = 0; i < n; ++i) start[i] = q0(i);
@@ -523,6 +575,7 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     best_err.cost = HUGE_VAL;
     // a goal out of the arm's reach: the seed is the best there is, without a single step
     const int attempts = reach_map(c).may_reach(position(t), pos_tol) ? max_restarts + 1 : 0;
+    int solved_at = -1;
     for (int attempt = 0; attempt < attempts; ++attempt) {
       if (attempt > 0)
         for (size_t i = 0; i < n; ++i) start[i] = rng.uniform(c.lower[i], c.upper[i]);
@@ -531,7 +584,10 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
         best = solver.q;
         best_err = err;
       }
-      if (ok) break;
+      if (ok) {
+        solved_at = attempt;
+        break;
+      }
     }
     // the answer is judged with the same forward kinematics as cn_chain_fk
     KDL::JntArray qb(n);
@@ -541,14 +597,22 @@ int cn_chain_ik(int h, const double *target7, const double *seed, int max_restar
     Mat3 R;
     for (int r = 0; r < 3; ++r)
       for (int k = 0; k < 3; ++k) R(r, k) = f.M(r, k);
-    double pos = (position(t) - Vec3(f.p.x(), f.p.y(), f.p.z())).norm(), rot;
-    rot_log(rot_matrix(t) * R.transpose(), rot);
+    double e[2];
+    e[0] = (position(t) - Vec3(f.p.x(), f.p.y(), f.p.z())).norm();
+    rot_log(rot_matrix(t) * R.transpose(), e[1]);
     if (out_err) {
-      out_err[0] = pos;
-      out_err[1] = rot;
+      out_err[0] = e[0];
+      out_err[1] = e[1];
     }
-    return pos <= pos_tol && rot <= rot_tol ? 0 : 1;
+    int status = e[0] <= pos_tol && e[1] <= rot_tol ? 0 : 1;
+    if (attempts == 0 || solved_at == 0) c.memo.keep(std::move(key), out_q, n, e, status);
+    return status;
   });
+}
+
+/* The number of answers the chain's IK memo keeps (see IkMemo), at most IkMemo::kMaxEntries. */
+int cn_chain_ik_memo_size(int h) {
+  return guard([&] { return (int)chain(h).memo.answers.size(); });
 }
 
 }  // extern "C"

@@ -307,6 +307,10 @@ int cn_chain_reach_map_set(int chain, const double *params, const unsigned char 
 int cn_chain_ik(int chain, const double *target7, const double *seed_q, int max_restarts,
                 double pos_tol, double rot_tol, unsigned int rng_seed, double *out_q,
                 double *out_err2);
+/* How many answers of cn_chain_ik the chain keeps: those its random restarts play no part in
+ * (a goal out of reach, a goal solved from the seed), asked again with the same goal, seed,
+ * restart count and tolerances (bit for bit); at most 4096 (emptied when full). */
+int cn_chain_ik_memo_size(int chain);
 
 #ifdef __cplusplus
 }
