@@ -130,3 +130,21 @@ with a message naming the offending value, and the image survives."
       (sb-ext:gc :full t)
       (let ((growth (- (rss-bytes) before)))
         (is (< growth (* 5 1024 1024)) "RSS grew by ~,1f MB" (/ growth 1048576d0))))))
+
+(test freed-heap-pages-are-kept
+  "The collector gives back only runs of free pages of *GC-RELEASE-GRANULARITY*, when loaded and
+when a saved image starts; NIL or a value that is not a power of two of at least 32 KB changes
+nothing."
+  (flet ((granularity () (sb-alien:extern-alien "gencgc_release_granularity" sb-alien:unsigned-long)))
+    (is (= *gc-release-granularity* (granularity)))
+    (is (member 'cram-native::keep-freed-heap-pages sb-ext:*init-hooks*))
+    (let ((before (granularity)))
+      (unwind-protect
+           (progn
+             (dolist (bad (list nil 0 100000 (1- (expt 2 20)) 16384))
+               (let ((*gc-release-granularity* bad))
+                 (is (null (cram-native::keep-freed-heap-pages)) "~s was applied" bad)
+                 (is (= before (granularity)))))
+             (let ((*gc-release-granularity* (expt 2 20)))
+               (is (= (expt 2 20) (cram-native::keep-freed-heap-pages) (granularity)))))
+        (setf (sb-alien:extern-alien "gencgc_release_granularity" sb-alien:unsigned-long) before)))))
