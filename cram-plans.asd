@@ -597,7 +597,7 @@ the node, parameters, publishing the belief state on /tf and /visualization_mark
   :depends-on ("cram-plans/tests/base" "cram-plans/cram-urdf-projection" "cram-plans/cram-pr2-description"
                "cram-plans/cram-bullet-world-tutorial" "cram-plans/replay")
   :pathname "tests/"
-  :components ((:file "sweep-tests")))
+  :components ((:file "sweep-tests") (:file "contact-prefilter-tests")))
 
 (defsystem "cram-plans/tests/robot-ros"
   :description "Plans over ROS against the simulated robot node (tools/ros/sim_robot.py)."

@@ -17,6 +17,7 @@
 (defcn "cn_attach" :int (w :int) (o :int) (p :int) (l :int) (loose :int))
 (defcn "cn_detach" :int (w :int) (o :int) (p :int))
 (defcn "cn_attachments" :int (w :int) (out :pointer) (cap :int))
+(defcn "cn_set_contact_prefilter" :int (on :int))
 
 (defvar *pair-capacity* 256 "Smallest heap capacity of the contact pair buffers when 8 pairs do not suffice.")
 
@@ -50,6 +51,13 @@ penetrating), as a list of (object-a link-a object-b link-b distance); links are
 plain bodies.  Ignored pairs and filtered groups are left out."
   (let ((th (real-arg threshold 'world-contacts "threshold")))
     (%collect-pairs (lambda (pi4 pd cap) (ccall "cn_world_contacts" world th pi4 pd cap)))))
+
+(defun set-contact-prefilter (on)
+  "Whether OBJECT-CONTACTS and OBJECT-FIRST-CONTACT of an articulated object leave out, without
+asking Bullet's contact query, the link pairs that a GJK distance (never more than the distance)
+proves more than the threshold plus 1 mm apart: true (the default) or NIL, for comparisons: the
+answers are the same either way. Returns the setting before."
+  (= 1 (ccall "cn_set_contact_prefilter" (if on 1 0))))
 
 (defun object-contacts (world object &key (threshold 0d0) except)
   "Contacts of OBJECT (all links of an articulated object) with every other object but those

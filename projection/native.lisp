@@ -25,7 +25,7 @@
    #:robot-link-has-body-p #:set-robot-joints #:robot-joints #:robot-joint #:robot-link-poses #:robot-link-poses-if
    #:robot-link-pose #:set-robot-self-collision
    ;; queries
-   #:world-contacts #:object-contacts #:object-first-contact #:closest-distance #:ignore-pair #:ray-test
+   #:world-contacts #:object-contacts #:object-first-contact #:set-contact-prefilter #:closest-distance #:ignore-pair #:ray-test
    #:ray-hit-objects
    #:attach #:detach #:attachments
    ;; rendering

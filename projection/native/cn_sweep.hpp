@@ -301,5 +301,10 @@ double convex_distance(const btConvexShape *a, const btTransform &ta, const btCo
 // gap between their support points), true otherwise.
 bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other);
 
+// The distance of link LINK (with a body) of the articulated object O, where it is, from the
+// collision object OTHER, as convex_distance finds it over the link's convex pieces (a mesh
+// piece stands in as its box): never more than the distance; MAXD when nothing is nearer.
+double link_gap(Object &o, int link, const btCollisionObject *other, double maxd);
+
 }  // namespace sweep
 }  // namespace cn

@@ -201,6 +201,11 @@ int cn_object_contacts_except(int world, int obj, double threshold, const int *e
 int cn_object_first_contact(int world, int obj, double threshold, const int *except, int n_except,
                             const int *skip_links, int n_skip, const int *allowed3, int n_allowed,
                             int *out4);
+/* Whether the contact queries of an articulated object's links (cn_object_contacts*,
+ * cn_object_first_contact) leave out the pairs a GJK distance (a lower bound) proves more than
+ * threshold + 1 mm apart, without asking Bullet: on (1) by default; off (0) for comparisons.
+ * The answers are the same either way. -> the setting before. */
+int cn_set_contact_prefilter(int on);
 /* Closest distance between two objects (link -1 = whole object), searched up to max_dist.
  * out7: distance, point on A xyz, point on B xyz.  Returns 1 if a pair closer than max_dist
  * was found, 0 if not (distance then = max_dist). */
