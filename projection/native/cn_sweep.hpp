@@ -300,6 +300,10 @@ double convex_distance(const btConvexShape *a, const btTransform &ta, const btCo
 // OTHER: false only when every piece of OTHER near A is proven apart from it (an axis with a
 // gap between their support points), true otherwise.
 bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other);
+// The same for A in the world's frame whose box there (as its getAabb gives it for the
+// identity) is known: LO HI.
+bool may_touch(const btConvexShape *a, const btVector3 &lo, const btVector3 &hi,
+               const btCollisionObject *other);
 
 // The distance of link LINK (with a body) of the articulated object O, where it is, from the
 // collision object OTHER, as convex_distance finds it over the link's convex pieces (a mesh

@@ -243,12 +243,14 @@ void against_shape(Query &q, const btCollisionShape *b, const btTransform &tb) {
   }
 }
 
-double query(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other, double maxd,
-             bool touch_enough) {
+// The query of A (at TA; null: A's frame is the world's) whose box there is LO HI.
+double query(const btConvexShape *a, const btTransform *ta, const btVector3 &lo, const btVector3 &hi,
+             const btCollisionObject *other, double maxd, bool touch_enough) {
   Query q;
   q.a = {a, ta};
   q.margin = a->getMargin();
-  a->getAabb(ta ? *ta : btTransform::getIdentity(), q.lo, q.hi);
+  q.lo = lo;
+  q.hi = hi;
   q.centre = (q.lo + q.hi) * 0.5;
   btVector3 g(maxd, maxd, maxd);
   q.lo -= g;
@@ -264,12 +266,21 @@ double query(const btConvexShape *a, const btTransform *ta, const btCollisionObj
 
 double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
                        double maxd) {
-  return query(a, &ta, other, maxd, false);
+  btVector3 lo, hi;
+  a->getAabb(ta, lo, hi);
+  return query(a, &ta, lo, hi, other, maxd, false);
 }
 
 bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other) {
+  btVector3 lo, hi;
+  a->getAabb(ta ? *ta : btTransform::getIdentity(), lo, hi);
+  return query(a, ta, lo, hi, other, 1e-10, true) < 1e-10;
+}
+
+bool may_touch(const btConvexShape *a, const btVector3 &lo, const btVector3 &hi,
+               const btCollisionObject *other) {
   // apart only by a proven gap, of more than rounding
-  return query(a, ta, other, 1e-10, true) < 1e-10;
+  return query(a, nullptr, lo, hi, other, 1e-10, true) < 1e-10;
 }
 
 }  // namespace sweep

@@ -149,7 +149,7 @@ bool Sweep::hull_touches(const Mover &m, const btTransform &ta, const btTransfor
     btVector3 lo, hi;
     hull.getAabb(btTransform::getIdentity(), lo, hi);
     if (!TestAabbAgainstAabb2(lo, hi, h->m_aabbMin, h->m_aabbMax)) continue;
-    if (may_touch(&hull, nullptr, other)) return true;
+    if (may_touch(&hull, lo, hi, other)) return true;
   }
   return false;
 }
