@@ -154,9 +154,6 @@ static bool each_link_neighbour(World &w, const Object &o, const int *except, in
   return false;
 }
 
-// Contacts of every link of the articulated object O with other objects: what contactTest of
-// each link finds, from one broadphase query of the union of the links' boxes (instead of one
-// tree query per link, most of whose hits would be the object's own links).
 // Whether the link L of the articulated object O is farther from OTHER than Bullet's contact
 // query could find them touching within THRESHOLD: the sweep checks' GJK (sweep::link_gap, never
 // more than the distance) proves them more than THRESHOLD + 1 mm apart. The query, which builds
@@ -168,6 +165,9 @@ static bool proven_apart(Object &o, int l, const btCollisionObject *other, doubl
   return g_contact_prefilter && maxd > 0 && sweep::link_gap(o, l, other, maxd) >= maxd;
 }
 
+// Contacts of every link of the articulated object O with other objects: what contactTest of
+// each link finds, from one broadphase query of the union of the links' boxes (instead of one
+// tree query per link, most of whose hits would be the object's own links).
 static void articulated_contacts(World &w, Object &o, double threshold, PairList &pairs,
                                  const int *except, int n_except) {
   each_link_neighbour(w, o, except, n_except, [&](int l, btRigidBody *rb, btBroadphaseProxy *p) {
