@@ -6,7 +6,8 @@
   (:export
    ;; errors and the library
    #:native-error #:native-error-function #:native-error-code #:native-error-message
-   #:with-float-traps-masked* #:*gc-release-granularity* #:library-directory #:native-version #:with-scratch-vector
+   #:with-float-traps-masked* #:*gc-release-granularity* #:keep-freed-heap-pages
+   #:library-directory #:native-version #:with-scratch-vector
    #:add-package-path #:add-search-dir #:clear-search-paths #:resolve-path
    ;; worlds
    #:make-world #:destroy-world #:copy-world #:world-alive-p #:world-count
@@ -69,10 +70,12 @@ when a saved image starts; shorter runs it zeroes in place, to be used again. NI
 \(32 KB). Projection allocates about 50 MB of short-lived Lisp data per household run: given back
 after every collection, the pages were faulted in again by the next runs (about 6 700 page
 faults and 15 ms of kernel time per run). With the default the heap keeps the pages it has used
-\(the resident set stays at the most the heap held since the start, without growing past it).")
+\(the resident set stays at the most the heap held since the start, without growing past it).
+Another value set in a running image takes effect with KEEP-FREED-HEAP-PAGES.")
 
 (defun keep-freed-heap-pages ()
-  "Apply *GC-RELEASE-GRANULARITY* (see there); its value when applied, NIL otherwise."
+  "Apply *GC-RELEASE-GRANULARITY* (see there) to SBCL's collector; its value when applied, NIL
+when it is not a power of two of at least 32 KB (SBCL's setting is then left as it is)."
   (let ((g *gc-release-granularity*))
     (when (and (typep g '(integer 32768)) (= 1 (logcount g)))
       (setf (sb-alien:extern-alien "gencgc_release_granularity" sb-alien:unsigned-long) g))))

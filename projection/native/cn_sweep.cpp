@@ -102,13 +102,7 @@ namespace sweep {
 double link_gap(Object &o, int link, const btCollisionObject *other, double maxd) {
   if (!o.sweep_links) model_sweep_info(o);
   const LinkInfo &li = static_cast<const ModelSweepInfo *>(o.sweep_links.get())->links[link];
-  const btTransform &t = o.link_rb[link]->getWorldTransform();
-  double d = maxd;
-  for (const Piece &p : li.pieces) {
-    d = std::min(d, convex_distance(p.shape, p.placed(t), other, d));
-    if (d <= 0) break;
-  }
-  return d;
+  return pieces_distance(li.pieces, o.link_rb[link]->getWorldTransform(), other, maxd);
 }
 
 Scratch &scratch() {

@@ -296,6 +296,20 @@ inline void link_chain(const Model &m, int link, std::vector<int> &out) {
 double convex_distance(const btConvexShape *a, const btTransform &ta, const btCollisionObject *other,
                        double maxd);
 
+// The distance of a body's convex PIECES, the body at pose T, from the collision object OTHER:
+// the smallest convex_distance of a piece, searched up to MAXD (MAXD when farther), stopping at
+// the first piece that touches (<= 0).
+template <class Pieces>
+double pieces_distance(const Pieces &pieces, const btTransform &t, const btCollisionObject *other,
+                       double maxd) {
+  double d = maxd;
+  for (const Piece &p : pieces) {
+    d = std::min(d, convex_distance(p.shape, p.placed(t), other, d));
+    if (d <= 0) break;
+  }
+  return d;
+}
+
 // Whether the convex A (at TA; null: A's frame is the world's) may touch the collision object
 // OTHER: false only when every piece of OTHER near A is proven apart from it (an axis with a
 // gap between their support points), true otherwise.

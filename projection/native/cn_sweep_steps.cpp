@@ -172,12 +172,7 @@ Closest Sweep::distance(const Mover &m, const btTransform &t, double maxd, const
 // The distance of M at pose T from OTHER, searched up to MAXD (MAXD when farther), from GJK on
 // its pieces; <= 0 when they touch.
 double Sweep::distance_at(const Mover &m, const btTransform &t, double maxd, const btCollisionObject *other) {
-  double d = maxd;
-  for (const Piece &p : m.pieces) {
-    d = std::min(d, convex_distance(p.shape, p.placed(t), other, d));
-    if (d <= 0) break;
-  }
-  return d;
+  return pieces_distance(m.pieces, t, other, maxd);
 }
 
 // Whether M at pose T touches OTHER by Bullet's contact query (the discrete checks' verdict),

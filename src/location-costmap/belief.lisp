@@ -262,7 +262,7 @@ from the ends of the row inwards, the cells between are taken without a test."
 ;;; The runs of an environment's links are kept between grids: a link that stands where it
 ;;; stood for an earlier grid of the same geometry is not rasterised again. The links that have
 ;;; never moved (the furniture's bodies, its shelves and boards) are kept together in one bit
-;;; array, so that a new grid (a drawer opened) costs a copy of it and the runs of the links that
+;;; array, so that a new grid (a drawer opened) costs or'ing it in and the runs of the links that
 ;;; have moved, not a pass over every link.
 
 (defvar *link-runs-cache* '()
@@ -362,7 +362,7 @@ again."
           (when (and (zerop (sbit moved i)) entries (not (same-pose-p poses i (car (first entries)))))
             (setf (sbit moved i) 1
                   (link-runs-record-still record) nil))))
-      ;; the links that have not moved: their cells made once, then copied
+      ;; the links that have not moved: their cells made once, then or'ed in
       (let ((still (link-runs-record-still record)))
         (unless (and still (equal (array-dimensions still) (array-dimensions bits)))
           (setf still (make-array (array-dimensions bits) :element-type 'bit :initial-element 0))
