@@ -154,12 +154,14 @@ static bool each_link_neighbour(World &w, const Object &o, const int *except, in
   return false;
 }
 
+// Whether PROVEN_APART is asked (cn_set_contact_prefilter).
+static bool g_contact_prefilter = true;
+
 // Whether the link L of the articulated object O is farther from OTHER than Bullet's contact
 // query could find them touching within THRESHOLD: the sweep checks' GJK (sweep::link_gap, never
 // more than the distance) proves them more than THRESHOLD + 1 mm apart. The query, which builds
 // and runs a collision algorithm for the pair, is then not asked: it finds nothing there (the
 // two distances agree to a tenth of a millimetre where they meet).
-static bool g_contact_prefilter = true;
 static bool proven_apart(Object &o, int l, const btCollisionObject *other, double threshold) {
   const double maxd = threshold + 1e-3;
   return g_contact_prefilter && maxd > 0 && sweep::link_gap(o, l, other, maxd) >= maxd;

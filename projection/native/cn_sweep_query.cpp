@@ -271,16 +271,24 @@ double convex_distance(const btConvexShape *a, const btTransform &ta, const btCo
   return query(a, &ta, lo, hi, other, maxd, false);
 }
 
+namespace {
+// MAY_TOUCH of A (at TA; null: A's frame is the world's) whose box there is LO HI: apart only by
+// a proven gap, of more than rounding.
+bool touch_query(const btConvexShape *a, const btTransform *ta, const btVector3 &lo,
+                 const btVector3 &hi, const btCollisionObject *other) {
+  return query(a, ta, lo, hi, other, 1e-10, true) < 1e-10;
+}
+}  // namespace
+
 bool may_touch(const btConvexShape *a, const btTransform *ta, const btCollisionObject *other) {
   btVector3 lo, hi;
   a->getAabb(ta ? *ta : btTransform::getIdentity(), lo, hi);
-  return query(a, ta, lo, hi, other, 1e-10, true) < 1e-10;
+  return touch_query(a, ta, lo, hi, other);
 }
 
 bool may_touch(const btConvexShape *a, const btVector3 &lo, const btVector3 &hi,
                const btCollisionObject *other) {
-  // apart only by a proven gap, of more than rounding
-  return query(a, nullptr, lo, hi, other, 1e-10, true) < 1e-10;
+  return touch_query(a, nullptr, lo, hi, other);
 }
 
 }  // namespace sweep
